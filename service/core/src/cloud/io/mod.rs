@@ -1,0 +1,1 @@
+//! Point-cloud file formats (PCD, PLY) as untrusted input.

@@ -1,0 +1,10 @@
+//! Point clouds: the cloud type, k-NN normals, the support plane, and file formats.
+
+pub mod io;
+pub mod normals;
+pub mod plane;
+pub mod point_cloud;
+
+pub use normals::{CloudIndex, Orientation, estimate_normals};
+pub use plane::{Plane, RansacParams, detect_support_plane};
+pub use point_cloud::{MIN_POINTS, PointCloud, decode_packed_vec3, decode_packed_xyz, encode_packed_xyz};

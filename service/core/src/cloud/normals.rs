@@ -1,0 +1,160 @@
+//! Surface normals by k-nearest-neighbour PCA (method.md §3), and the k-d tree index the planner
+//! shares for its neighbourhood queries (Eq 5.6).
+
+use kiddo::{KdTree, SquaredEuclidean};
+use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
+
+/// A k-d tree over the cloud's points (kiddo), indexed by point number.
+pub struct CloudIndex {
+    tree: KdTree<f64, 3>,
+}
+
+impl CloudIndex {
+    pub fn new(points: &[Point3<f64>]) -> Self {
+        let entries: Vec<[f64; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
+        Self {
+            tree: (&entries).into(),
+        }
+    }
+
+    /// Indices of the k nearest points (the query point itself included when it is in the cloud),
+    /// nearest first.
+    pub fn nearest(&self, p: &Point3<f64>, k: usize) -> Vec<usize> {
+        self.tree
+            .nearest_n::<SquaredEuclidean>(&[p.x, p.y, p.z], k)
+            .into_iter()
+            .map(|n| n.item as usize)
+            .collect()
+    }
+
+    /// Index of and distance to the nearest point.
+    pub fn nearest_one(&self, p: &Point3<f64>) -> (usize, f64) {
+        let n = self.tree.nearest_one::<SquaredEuclidean>(&[p.x, p.y, p.z]);
+        (n.item as usize, n.distance.sqrt())
+    }
+
+    /// Indices of the points closer than `radius`: the neighbourhood Φ of Eq 5.6, in ascending
+    /// index order (deterministic for the seeded search).
+    pub fn within(&self, p: &Point3<f64>, radius: f64) -> Vec<usize> {
+        let mut v: Vec<usize> = self
+            .tree
+            .within_unsorted::<SquaredEuclidean>(&[p.x, p.y, p.z], radius * radius)
+            .into_iter()
+            .map(|n| n.item as usize)
+            .collect();
+        v.sort_unstable();
+        v
+    }
+}
+
+/// Unit normal of each point from the PCA of its k nearest neighbours: the eigenvector of the
+/// smallest eigenvalue of the neighbourhood covariance. Orientation follows `orient`.
+pub fn estimate_normals(
+    points: &[Point3<f64>],
+    index: &CloudIndex,
+    k: usize,
+    orient: Orientation,
+) -> Vec<Vector3<f64>> {
+    let k = k.clamp(3, points.len().max(3));
+    let mut normals = Vec::with_capacity(points.len());
+    for p in points {
+        let nb = index.nearest(p, k);
+        let mean = nb.iter().fold(Vector3::zeros(), |a, &i| a + points[i].coords) / nb.len() as f64;
+        let mut cov = Matrix3::zeros();
+        for &i in &nb {
+            let d = points[i].coords - mean;
+            cov += d * d.transpose();
+        }
+        let eig = SymmetricEigen::new(cov);
+        let imin = eig.eigenvalues.imin();
+        let mut n: Vector3<f64> = eig.eigenvectors.column(imin).into_owned();
+        if !n.iter().all(|v| v.is_finite()) || n.norm() < 1e-12 {
+            n = Vector3::z();
+        }
+        n.normalize_mut();
+        normals.push(n);
+    }
+    orient_normals(points, &mut normals, orient);
+    normals
+}
+
+/// Which way normals point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Orientation {
+    /// Toward a sensor at this position (single-view clouds: every point is seen from it).
+    TowardViewpoint(Point3<f64>),
+    /// Away from the cloud's centroid (whole-object clouds without a known sensor).
+    AwayFromCentroid,
+}
+
+/// Flips normals so they point outward as `orient` says.
+pub fn orient_normals(points: &[Point3<f64>], normals: &mut [Vector3<f64>], orient: Orientation) {
+    let c = super::point_cloud::centroid(points);
+    for (p, n) in points.iter().zip(normals.iter_mut()) {
+        let out = match orient {
+            Orientation::TowardViewpoint(v) => v - p,
+            Orientation::AwayFromCentroid => p - c,
+        };
+        if n.dot(&out) < 0.0 {
+            *n = -*n;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points on a sphere of radius r by a Fibonacci lattice.
+    pub fn sphere(n: usize, r: f64) -> Vec<Point3<f64>> {
+        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        (0..n)
+            .map(|i| {
+                let y = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+                let rad = (1.0 - y * y).sqrt();
+                let th = golden * i as f64;
+                Point3::new(r * rad * th.cos(), r * y, r * rad * th.sin())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn sphere_normals_are_radial_and_outward() {
+        let pts = sphere(1500, 0.04);
+        let idx = CloudIndex::new(&pts);
+        let n = estimate_normals(&pts, &idx, 12, Orientation::AwayFromCentroid);
+        for (p, n) in pts.iter().zip(&n) {
+            let radial = p.coords.normalize();
+            assert!(n.dot(&radial) > 0.99, "normal {n:?} at {p:?}");
+        }
+    }
+
+    #[test]
+    fn plane_normals_face_the_viewpoint() {
+        let pts: Vec<_> = (0..400)
+            .map(|i| Point3::new((i % 20) as f64 * 0.005, (i / 20) as f64 * 0.005, 0.0))
+            .collect();
+        let idx = CloudIndex::new(&pts);
+        let down = estimate_normals(
+            &pts,
+            &idx,
+            10,
+            Orientation::TowardViewpoint(Point3::new(0.0, 0.0, -1.0)),
+        );
+        assert!(down.iter().all(|n| (n.z + 1.0).abs() < 1e-9));
+    }
+
+    #[test]
+    fn within_is_sorted_and_exact() {
+        let pts = sphere(500, 0.05);
+        let idx = CloudIndex::new(&pts);
+        let q = pts[10];
+        let w = idx.within(&q, 0.02);
+        assert!(w.windows(2).all(|p| p[0] < p[1]));
+        let brute: Vec<usize> = (0..pts.len())
+            .filter(|&i| (pts[i] - q).norm() < 0.02)
+            .collect();
+        assert_eq!(w, brute);
+        assert_eq!(idx.nearest_one(&q).0, 10);
+    }
+}

@@ -1,0 +1,9 @@
+//! Hands as data (method.md §2).
+
+pub mod catalog;
+pub mod description;
+
+pub use catalog::{HandCatalog, parse_hand_toml};
+pub use description::{
+    Finger, GraspRealisation, HandDescription, HandGeometry, PALM, ResolvedGrasp, TypeEquivalence,
+};

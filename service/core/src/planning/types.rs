@@ -1,0 +1,254 @@
+//! What goes into the planner and what comes out (the domain side of PlanGrasp).
+
+use crate::cloud::Plane;
+use crate::grasp_type::{GraspType, HandPart};
+use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// Dual-stage (the method) or the "without opposition" ablation of Table 5.1.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlannerMode {
+    #[default]
+    DualStage,
+    /// Skip stage 1 and search the m contacts directly over the whole cloud.
+    WithoutOpposition,
+}
+
+/// Planner parameters. Defaults are the dissertation's where it gives them (ε, μ, weights) and
+/// documented choices where it does not (method.md §3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PlannerOptions {
+    /// RNG seed: the same request and seed give the same plan.
+    pub seed: u64,
+    pub mode: PlannerMode,
+    /// ε, lower bound on S (Eq 5.2).
+    pub epsilon: f64,
+    /// Friction coefficient μ.
+    pub friction: f64,
+    /// Torsion coefficient γ of the soft-finger grasp matrix (spread-normalised units).
+    pub torsion_gamma: f64,
+    /// (ω_R, ω_G) at stage 1 and at stage 2 (Eq 5.2).
+    pub stage1_weights: [f64; 2],
+    pub stage2_weights: [f64; 2],
+    /// Iterations per stage = clamp(iteration_fraction · |Φ|, min_iterations, max_iterations).
+    /// The text uses 10 % of the candidates with no cap.
+    pub iteration_fraction: f64,
+    pub min_iterations: usize,
+    pub max_iterations: usize,
+    /// Stop a stage after this many iterations without a better feasible configuration.
+    pub patience: usize,
+    /// Bounded widenings of the neighbourhoods when a stage finds nothing feasible.
+    pub restarts: usize,
+    /// Stage-1 neighbourhood radius λ₁ (m); default 0.6·a_max, bounded by the object's extent.
+    pub lambda1: Option<f64>,
+    /// Stage-2 neighbourhood radius λ₂ around the thumb-side point (m); default max(2 cm,
+    /// finger width). The finger side widens it by the fingers' span.
+    pub lambda2: Option<f64>,
+    /// k of the k-NN PCA normals.
+    pub normals_k: usize,
+    /// Back-off of the pre-grasp pose along the approach, m.
+    pub pregrasp_distance: f64,
+    /// Friction-cone edges of the Ferrari–Canny figure.
+    pub friction_cone_edges: usize,
+    /// Reject candidates whose posed hand collides with the support plane or the cloud.
+    pub check_collisions: bool,
+    /// Find and remove a support plane in the cloud when none is given.
+    pub detect_support_plane: bool,
+    /// Largest distance of the grasp centre from the object's estimated centre, perpendicular to
+    /// the approach, as a fraction of the object's radius (S ignores where the mass is).
+    pub max_center_offset: f64,
+}
+
+impl Default for PlannerOptions {
+    fn default() -> Self {
+        Self {
+            seed: 0,
+            mode: PlannerMode::DualStage,
+            epsilon: 0.7,
+            friction: 0.6,
+            torsion_gamma: 1.0,
+            stage1_weights: [0.3, 0.7],
+            stage2_weights: [0.7, 0.3],
+            iteration_fraction: 0.1,
+            min_iterations: 100,
+            max_iterations: 1500,
+            patience: 400,
+            restarts: 2,
+            lambda1: None,
+            lambda2: None,
+            normals_k: 16,
+            pregrasp_distance: 0.08,
+            friction_cone_edges: 8,
+            check_collisions: true,
+            detect_support_plane: true,
+            max_center_offset: 0.6,
+        }
+    }
+}
+
+/// What the caller knows beyond the cloud.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PlanHints {
+    /// Use this grasp type (must be realisable by the hand, directly or by equivalence).
+    pub grasp_type: Option<GraspType>,
+    /// Approach here (snapped to the nearest cloud point).
+    pub attention_point: Option<Point3<f64>>,
+    /// The plane the object stands on.
+    pub support_plane: Option<Plane>,
+    /// Sensor position in the cloud's frame: normals face it and it sets the approach side.
+    pub viewpoint: Option<Point3<f64>>,
+    /// Which way is up, when no support plane is known.
+    pub up: Option<Vector3<f64>>,
+}
+
+/// Who decided the grasp type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TypeSource {
+    /// The caller forced it.
+    Request,
+    /// The geometric rule on the object's shape and size (no image or no model).
+    GeometricRule,
+    /// The grasp-type network (perception).
+    Model,
+}
+
+/// Where the support plane came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlaneSource {
+    Request,
+    Detected,
+    None,
+}
+
+/// A hand pose: position and orientation of the hand frame (see `hand::description`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Pose {
+    pub position: Point3<f64>,
+    pub orientation: UnitQuaternion<f64>,
+}
+
+impl Pose {
+    pub fn isometry(&self) -> Isometry3<f64> {
+        Isometry3::from_parts(self.position.coords.into(), self.orientation)
+    }
+}
+
+/// One final contact.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Contact {
+    pub position: Point3<f64>,
+    /// Outward surface normal at the contact.
+    pub normal: Vector3<f64>,
+    /// Finger name, or "palm".
+    pub finger: String,
+    pub part: HandPart,
+    /// Index of the point in the cloud the planner searched (after support-plane removal).
+    pub point_index: usize,
+}
+
+/// The pregrasping opposition O^s_{h1-h2}(C_o) (Definition 1, Eq 5.1).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Opposition {
+    pub h1: HandPart,
+    pub h2: HandPart,
+    pub points: [Point3<f64>; 2],
+    pub normals: [Vector3<f64>; 2],
+}
+
+/// Quality of the final grasp.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Quality {
+    /// S, the Grasp Isotropy Index (Eq 5.3).
+    pub gii: f64,
+    /// R (Eq 5.4).
+    pub reachability: f64,
+    /// G (Eq 5.5).
+    pub attention: f64,
+    /// Q = ω_R·R + ω_G·G with the final stage's weights (Eq 5.2).
+    pub objective: f64,
+    /// Ferrari–Canny ε over linearised soft-finger cones (not part of the objective).
+    pub epsilon: f64,
+    /// Grasp opening a (m) or polygon area (m²) and palm height h (m) used by R.
+    pub aperture_or_area: f64,
+    pub palm_height: f64,
+}
+
+/// Search statistics of one stage.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct StageStats {
+    /// |Φ_ĝ|: the number of configurations the stage could choose from.
+    pub solution_space: f64,
+    /// Candidate points per contact slot (the union of the neighbourhoods).
+    pub candidates: usize,
+    pub iterations: usize,
+    pub evaluations: usize,
+    pub accepted: usize,
+    pub restarts: usize,
+    pub feasible_found: bool,
+    pub seconds: f64,
+}
+
+/// Wall time per step of the plan, seconds.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Timings {
+    pub preprocess: f64,
+    pub normals: f64,
+    pub grasp_type: f64,
+    pub stage1: f64,
+    pub stage2: f64,
+    pub finalize: f64,
+    pub total: f64,
+}
+
+/// Collision status of the planned hand.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct CollisionReport {
+    pub checked: bool,
+    /// The posed hand at the final grasp, the pre-grasp and along the approach is clear of the
+    /// support plane and the cloud.
+    pub clear: bool,
+    pub final_points_in_collision: usize,
+    pub pregrasp_points_in_collision: usize,
+    pub approach_points_in_collision: usize,
+    /// Least signed distance of the hand geometry to the support plane (m), when one is known.
+    pub min_plane_clearance: Option<f64>,
+}
+
+/// The planner's answer: g = (C_g, Joint_g, Pose_g) with the information that led to it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GraspPlan {
+    pub hand: String,
+    pub grasp_type: GraspType,
+    /// The type asked for or detected before mapping to what the hand realises.
+    pub requested_type: GraspType,
+    pub type_source: TypeSource,
+    /// Per-type scores in the order s = 1..6 (one-hot for the geometric rule and forced types).
+    pub type_scores: [f64; 6],
+    pub attention_point: Point3<f64>,
+    pub attention_normal: Vector3<f64>,
+    pub opposition: Opposition,
+    pub contacts: Vec<Contact>,
+    pub hand_pose: Pose,
+    pub pregrasp_pose: Pose,
+    /// Joint angles by name, when the hand's kinematics are known (empty for parametric hands).
+    pub joints: Vec<(String, f64)>,
+    pub quality: Quality,
+    /// Whether S ≥ ε and every hard constraint held. When false, `infeasible_reason` says why and
+    /// the plan is the best configuration found.
+    pub feasible: bool,
+    pub infeasible_reason: Option<String>,
+    pub stage1: StageStats,
+    pub stage2: StageStats,
+    pub timings: Timings,
+    pub collision: CollisionReport,
+    pub support_plane: Option<Plane>,
+    pub plane_source: PlaneSource,
+    pub points_used: usize,
+    pub mode: PlannerMode,
+    pub seed: u64,
+    pub warnings: Vec<String>,
+}
