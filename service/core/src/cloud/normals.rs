@@ -55,13 +55,26 @@ pub fn estimate_normals(
     k: usize,
     orient: Orientation,
 ) -> Vec<Vector3<f64>> {
+    normals_from_neighbours(points, &knn_lists(points, index, k), orient)
+}
+
+/// The k nearest neighbours of every point (itself first), k clamped to [3, n].
+pub fn knn_lists(points: &[Point3<f64>], index: &CloudIndex, k: usize) -> Vec<Vec<usize>> {
     let k = k.clamp(3, points.len().max(3));
+    points.iter().map(|p| index.nearest(p, k)).collect()
+}
+
+/// Normals by PCA over given neighbour lists (see [`estimate_normals`]).
+pub fn normals_from_neighbours(
+    points: &[Point3<f64>],
+    neighbours: &[Vec<usize>],
+    orient: Orientation,
+) -> Vec<Vector3<f64>> {
     let mut normals = Vec::with_capacity(points.len());
-    for p in points {
-        let nb = index.nearest(p, k);
+    for nb in neighbours {
         let mean = nb.iter().fold(Vector3::zeros(), |a, &i| a + points[i].coords) / nb.len() as f64;
         let mut cov = Matrix3::zeros();
-        for &i in &nb {
+        for &i in nb {
             let d = points[i].coords - mean;
             cov += d * d.transpose();
         }

@@ -212,8 +212,9 @@ mod tests {
     fn finds_the_table_and_orients_it_up() {
         let pts = table_and_box();
         let fit = detect_support_plane(&pts, RansacParams::default(), 1, 32).unwrap();
-        assert!((fit.plane.normal.z - 1.0).abs() < 1e-6, "{:?}", fit.plane);
-        assert!(fit.plane.offset.abs() < 1e-6);
+        assert!((fit.plane.normal.z - 1.0).abs() < 1e-3, "{:?}", fit.plane);
+        // The side face's lowest row lies in the 4 mm inlier band and pulls the fit slightly.
+        assert!(fit.plane.offset.abs() < 1e-3);
         let kept = fit.removed.iter().filter(|r| !**r).count();
         assert!(kept >= 144 && kept <= 288, "kept {kept}");
     }

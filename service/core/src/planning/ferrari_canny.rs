@@ -70,7 +70,7 @@ fn directions() -> &'static [Vector6<f64>] {
     DIRS.get_or_init(|| {
         use rand_distr_free::gaussian;
         let mut rng = ChaCha8Rng::seed_from_u64(0xfe44a41);
-        let mut v = Vec::with_capacity(4012);
+        let mut v = Vec::with_capacity(1012);
         for k in 0..6 {
             for s in [1.0, -1.0] {
                 let mut e = Vector6::zeros();
@@ -78,7 +78,7 @@ fn directions() -> &'static [Vector6<f64>] {
                 v.push(e);
             }
         }
-        while v.len() < 4012 {
+        while v.len() < 1012 {
             let g = Vector6::from_fn(|_, _| gaussian(&mut rng));
             let n = g.norm();
             if n > 1e-6 {
@@ -96,6 +96,146 @@ mod rand_distr_free {
         let u1: f64 = rng.random_range(f64::EPSILON..1.0);
         let u2: f64 = rng.random();
         (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+    }
+}
+
+/// Lowest sampled directions used as starts of the vertex search.
+const STARTS: usize = 8;
+const TIGHT: f64 = 1e-9;
+
+/// Facets of conv(W) at distance δ from the origin are the vertices a of P° = {a : a·wᵢ ≤ 1} with
+/// ‖a‖ = 1/δ, so the nearest facet is the vertex of largest norm. From a feasible point, moves to
+/// a vertex while increasing ‖a‖, then pivots along edges (simplex-style) while the norm grows.
+/// Returns the distance 1/‖a‖ of the local optimum.
+fn polar_hill_climb(w: &[Vector6<f64>], a0: Vector6<f64>) -> Option<f64> {
+    let mut a = a0;
+    let mut tight: Vec<usize> = Vec::with_capacity(6);
+    // Phase 1: reach a vertex (six independent tight constraints).
+    for _ in 0..64 {
+        tight.clear();
+        for (i, x) in w.iter().enumerate() {
+            if a.dot(x) >= 1.0 - TIGHT && tight.len() < 6 && independent(w, &tight, i) {
+                tight.push(i);
+            }
+        }
+        if tight.len() == 6 {
+            break;
+        }
+        // Direction in the null space of the tight rows that does not decrease ‖a‖.
+        let mut d = a;
+        let basis = orthonormal_rows(w, &tight);
+        for b in &basis {
+            d -= b * b.dot(&d);
+        }
+        if d.norm() < 1e-12 {
+            // a is orthogonal to the null space: any null direction keeps ‖a‖ non-decreasing.
+            let mut e = Vector6::zeros();
+            for k in 0..6 {
+                e.fill(0.0);
+                e[k] = 1.0;
+                for b in &basis {
+                    e -= b * b.dot(&e);
+                }
+                if e.norm() > 1e-9 {
+                    break;
+                }
+            }
+            d = if e.dot(&a) >= 0.0 { e } else { -e };
+        }
+        let t = ratio_test(w, &a, &d)?;
+        a += d * t;
+    }
+    if tight.len() < 6 {
+        return None;
+    }
+    // Phase 2: pivot to neighbouring vertices while the norm grows.
+    for _ in 0..256 {
+        let m = Matrix6::from_fn(|r, c| w[tight[r]][c]);
+        let inv = m.try_inverse()?;
+        let mut improved = false;
+        for k in 0..6 {
+            // Leaving constraint k: d = −M⁻¹eₖ keeps the others tight and loosens k.
+            let d: Vector6<f64> = -inv.column(k).into_owned();
+            let Some(t) = ratio_test(w, &a, &d) else {
+                return Some(0.0); // unbounded P°: the origin is on the hull's boundary
+            };
+            let next = a + d * t;
+            if next.norm_squared() > a.norm_squared() * (1.0 + 1e-12) {
+                let entering = (0..w.len())
+                    .filter(|&i| !tight.contains(&i))
+                    .find(|&i| next.dot(&w[i]) >= 1.0 - TIGHT && w[i].dot(&d) > 0.0)?;
+                tight[k] = entering;
+                a = next;
+                improved = true;
+                break;
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+    let n = a.norm();
+    (n > 1e-12).then(|| 1.0 / n)
+}
+
+/// Largest step t ≥ 0 along d keeping every a·wᵢ ≤ 1 (None when unbounded).
+fn ratio_test(w: &[Vector6<f64>], a: &Vector6<f64>, d: &Vector6<f64>) -> Option<f64> {
+    let mut t = f64::INFINITY;
+    for x in w {
+        let rate = x.dot(d);
+        if rate > 1e-12 {
+            t = t.min(((1.0 - a.dot(x)) / rate).max(0.0));
+        }
+    }
+    t.is_finite().then_some(t)
+}
+
+fn orthonormal_rows(w: &[Vector6<f64>], rows: &[usize]) -> Vec<Vector6<f64>> {
+    let mut basis: Vec<Vector6<f64>> = Vec::with_capacity(rows.len());
+    for &r in rows {
+        let mut v = w[r];
+        for b in &basis {
+            v -= b * b.dot(&v);
+        }
+        let n = v.norm();
+        if n > 1e-9 {
+            basis.push(v / n);
+        }
+    }
+    basis
+}
+
+fn independent(w: &[Vector6<f64>], rows: &[usize], i: usize) -> bool {
+    let mut v = w[i];
+    for b in orthonormal_rows(w, rows) {
+        v -= b * b.dot(&v);
+    }
+    v.norm() > 1e-7 * w[i].norm().max(1e-12)
+}
+
+/// Calls `f` with every ascending 6-subset of 0..n.
+#[cfg(test)]
+fn for_each_6_subset(n: usize, mut f: impl FnMut(&[usize; 6])) {
+    if n < 6 {
+        return;
+    }
+    let mut idx = [0usize, 1, 2, 3, 4, 5];
+    loop {
+        f(&idx);
+        let mut k = 5;
+        loop {
+            if idx[k] < n - 6 + k {
+                idx[k] += 1;
+                for j in k + 1..6 {
+                    idx[j] = idx[j - 1] + 1;
+                }
+                break;
+            }
+            if k == 0 {
+                return;
+            }
+            k -= 1;
+        }
     }
 }
 
@@ -117,27 +257,11 @@ pub fn epsilon_of_wrenches(w: &[Vector6<f64>]) -> f64 {
         return 0.0;
     }
     let mut best = scored[0].0;
-    for &(_, i) in scored.iter().take(32) {
-        let mut u = dirs[i];
-        for _ in 0..12 {
-            // The six wrenches most active in direction u span the facet u points to.
-            let mut order: Vec<usize> = (0..w.len()).collect();
-            order.sort_by(|&a, &b| u.dot(&w[b]).total_cmp(&u.dot(&w[a])));
-            let m = Matrix6::from_fn(|r, c| w[order[r]][c]);
-            let Some(a) = m.lu().solve(&Vector6::repeat(1.0)) else {
-                break;
-            };
-            let an = a.norm();
-            if !an.is_finite() || an < 1e-12 {
-                break;
-            }
-            let worst = w.iter().map(|x| a.dot(x)).fold(f64::NEG_INFINITY, f64::max);
-            if worst <= 1.0 + 1e-9 {
-                best = best.min(1.0 / an);
-                break;
-            }
-            u = a / an;
-            best = best.min(support(&u));
+    for &(h, i) in scored.iter().take(STARTS) {
+        // a₀ = u / h(u) lies in the polar polytope P° = {a : a·wᵢ ≤ 1} with a tight constraint.
+        let a0 = dirs[i] / h;
+        if let Some(d) = polar_hill_climb(w, a0) {
+            best = best.min(d);
         }
     }
     best.max(0.0)
@@ -160,34 +284,16 @@ mod tests {
 
     /// Exact ε by enumerating every 6-subset as a candidate facet.
     fn brute_force(w: &[Vector6<f64>]) -> f64 {
-        let n = w.len();
         let mut best = f64::INFINITY;
-        let mut idx = [0usize, 1, 2, 3, 4, 5];
-        loop {
+        for_each_6_subset(w.len(), |idx| {
             let m = Matrix6::from_fn(|r, c| w[idx[r]][c]);
             if let Some(a) = m.lu().solve(&Vector6::repeat(1.0)) {
-                if a.iter().all(|v| v.is_finite())
-                    && w.iter().all(|x| a.dot(x) <= 1.0 + 1e-9)
-                {
+                if a.iter().all(|v| v.is_finite()) && w.iter().all(|x| a.dot(x) <= 1.0 + 1e-9) {
                     best = best.min(1.0 / a.norm());
                 }
             }
-            // next combination
-            let mut k = 5;
-            loop {
-                if idx[k] < n - 6 + k {
-                    idx[k] += 1;
-                    for j in k + 1..6 {
-                        idx[j] = idx[j - 1] + 1;
-                    }
-                    break;
-                }
-                if k == 0 {
-                    return if best.is_finite() { best } else { 0.0 };
-                }
-                k -= 1;
-            }
-        }
+        });
+        if best.is_finite() { best } else { 0.0 }
     }
 
     fn c(p: [f64; 3], n: [f64; 3]) -> ContactPoint {

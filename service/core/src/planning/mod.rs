@@ -1,9 +1,17 @@
 //! The dual-stage grasp planner with pregrasping opposition (dissertation ch. 5.4, Algorithm 4).
 
+pub mod annealing;
+pub mod collision;
+pub mod dual_stage;
 pub mod ferrari_canny;
-pub mod quality;
-pub mod types;
+pub mod hand_pose;
+pub mod object_shape;
+pub mod opposition;
 mod planner;
+pub mod quality;
+pub mod search_context;
+pub mod type_rule;
+pub mod types;
 
 pub use planner::{PlanInput, plan};
 pub use types::*;

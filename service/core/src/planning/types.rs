@@ -146,7 +146,7 @@ pub struct Contact {
     /// Finger name, or "palm".
     pub finger: String,
     pub part: HandPart,
-    /// Index of the point in the cloud the planner searched (after support-plane removal).
+    /// Index of the contact point in the request's cloud.
     pub point_index: usize,
 }
 

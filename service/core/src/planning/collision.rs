@@ -1,0 +1,232 @@
+//! Collision check of the posed hand (method.md §3) against the support plane and the scene cloud,
+//! with parry3d shapes: the palm as a box behind the palm surface, each finger in use as two
+//! capsules — base → a point off the contact along its normal → the fingertip resting on the
+//! contact. Fingers not in the grasp are taken as flexed out of the way (not checked).
+//!
+//! Points count as colliding only when they lie deeper than `tolerance` inside a shape, so that the
+//! contacts themselves and sensor noise do not; a configuration collides when at least
+//! `min_points` points do (single stray points are noise).
+
+use super::types::Pose;
+use crate::cloud::{CloudIndex, Plane};
+use crate::hand::HandDescription;
+use nalgebra::{Point3, Vector3};
+use parry3d_f64::math::{Pose3, Rot3, Vector as PVec};
+use parry3d_f64::query::PointQuery;
+use parry3d_f64::shape::{Capsule, Cuboid};
+
+/// Penetration depth below which a point is touching, not colliding, m.
+pub const DEFAULT_TOLERANCE: f64 = 0.003;
+/// Points that must collide before a configuration counts as colliding.
+pub const DEFAULT_MIN_POINTS: usize = 3;
+
+fn pv(p: &Point3<f64>) -> PVec {
+    PVec::new(p.x, p.y, p.z)
+}
+
+/// The hand's collision geometry in world coordinates.
+#[derive(Debug, Clone)]
+pub struct PosedHand {
+    palm_pose: Pose3,
+    palm: Cuboid,
+    /// Palm corners in world coordinates (for the plane test).
+    palm_corners: [Point3<f64>; 8],
+    capsules: Vec<(Point3<f64>, Point3<f64>, f64)>,
+}
+
+/// One finger in the grasp: its index in the hand and the contact it rests on.
+#[derive(Debug, Clone, Copy)]
+pub struct FingerContact {
+    pub finger: usize,
+    /// Index of the contact point in the searched cloud.
+    pub point: usize,
+    pub position: Point3<f64>,
+    /// Outward normal of the object at the contact.
+    pub normal: Vector3<f64>,
+}
+
+fn palm_geometry(hand: &HandDescription, pose: &Pose, back_off: f64) -> (Pose3, Cuboid, [Point3<f64>; 8]) {
+    let g = &hand.geometry;
+    let half = Vector3::new(g.palm_length / 2.0, g.palm_width / 2.0, g.palm_thickness / 2.0);
+    let iso = pose.isometry();
+    let center_local = Point3::new(0.0, 0.0, -half.z - back_off);
+    let center = iso * center_local;
+    let q = pose.orientation;
+    let rot = Rot3::from_xyzw(q.i, q.j, q.k, q.w);
+    let palm_pose = Pose3::from_parts(pv(&center), rot);
+    let mut corners = [Point3::origin(); 8];
+    for (k, c) in corners.iter_mut().enumerate() {
+        let s = |b: usize| if k >> b & 1 == 1 { 1.0 } else { -1.0 };
+        *c = iso
+            * Point3::new(
+                s(0) * half.x,
+                s(1) * half.y,
+                center_local.z + s(2) * half.z,
+            );
+    }
+    (palm_pose, Cuboid::new(PVec::new(half.x, half.y, half.z)), corners)
+}
+
+impl PosedHand {
+    /// The hand at the final grasp: palm at `pose` (touching the object when `palm_contact`), the
+    /// listed fingers resting on their contacts.
+    pub fn at_grasp(hand: &HandDescription, pose: &Pose, fingers: &[FingerContact], palm_contact: bool) -> Self {
+        // A palm in contact is backed off by the tolerance so that touching is not colliding.
+        let back = if palm_contact { DEFAULT_TOLERANCE } else { 0.0 };
+        let (palm_pose, palm, palm_corners) = palm_geometry(hand, pose, back);
+        let iso = pose.isometry();
+        let r = hand.geometry.finger_width / 2.0;
+        let capsules = fingers
+            .iter()
+            .flat_map(|f| {
+                let finger = &hand.fingers[f.finger];
+                let base = iso * Point3::from(finger.base);
+                let tip = f.position + f.normal * r;
+                let pre = f.position + f.normal * (r + 0.35 * finger.length);
+                [(base, pre, r), (pre, tip, r)]
+            })
+            .collect();
+        Self {
+            palm_pose,
+            palm,
+            palm_corners,
+            capsules,
+        }
+    }
+
+    /// The hand with its fingers open (tips at ± a_max/2 across the closing direction), palm at
+    /// `pose`: the pre-grasp and the approach.
+    pub fn open(hand: &HandDescription, pose: &Pose, fingers: &[usize]) -> Self {
+        let (palm_pose, palm, palm_corners) = palm_geometry(hand, pose, 0.0);
+        let iso = pose.isometry();
+        let r = hand.geometry.finger_width / 2.0;
+        let half_open = hand.geometry.max_aperture / 2.0 + r;
+        let capsules = fingers
+            .iter()
+            .map(|&i| {
+                let f = &hand.fingers[i];
+                let side = if f.thumb { -1.0 } else { 1.0 };
+                let base = Point3::from(f.base);
+                let tip = Point3::new(
+                    side * half_open.max(base.x.abs()),
+                    base.y,
+                    0.9 * f.length,
+                );
+                (iso * base, iso * tip, r)
+            })
+            .collect();
+        Self {
+            palm_pose,
+            palm,
+            palm_corners,
+            capsules,
+        }
+    }
+
+    /// Least signed distance of the hand geometry to the plane (negative: below it).
+    pub fn plane_clearance(&self, plane: &Plane) -> f64 {
+        let palm = self
+            .palm_corners
+            .iter()
+            .map(|c| plane.distance(c))
+            .fold(f64::INFINITY, f64::min);
+        self.capsules
+            .iter()
+            .flat_map(|(a, b, r)| [plane.distance(a) - r, plane.distance(b) - r])
+            .fold(palm, f64::min)
+    }
+
+    /// Number of cloud points deeper than `tolerance` inside the hand geometry.
+    pub fn points_inside(&self, points: &[Point3<f64>], index: &CloudIndex, tolerance: f64) -> usize {
+        let mut hit = vec![false; 0];
+        let mut count = 0usize;
+        let mut mark = |i: usize, hit: &mut Vec<bool>| {
+            if hit.is_empty() {
+                hit.resize(points.len(), false);
+            }
+            if !hit[i] {
+                hit[i] = true;
+                count += 1;
+            }
+        };
+        // Palm box.
+        let he = self.palm.half_extents;
+        let center = Point3::new(
+            self.palm_pose.translation.x,
+            self.palm_pose.translation.y,
+            self.palm_pose.translation.z,
+        );
+        for i in index.within(&center, he.length()) {
+            let proj = self.palm.project_point(&self.palm_pose, pv(&points[i]), true);
+            if proj.is_inside && (proj.point - pv(&points[i])).length() > tolerance {
+                mark(i, &mut hit);
+            }
+        }
+        for (a, b, r) in &self.capsules {
+            let mid = Point3::from((a.coords + b.coords) / 2.0);
+            let cap = Capsule::new(pv(a), pv(b), *r);
+            for i in index.within(&mid, (b - a).norm() / 2.0 + r) {
+                let proj = cap.project_point(&Pose3::IDENTITY, pv(&points[i]), true);
+                if proj.is_inside && (proj.point - pv(&points[i])).length() > tolerance {
+                    mark(i, &mut hit);
+                }
+            }
+        }
+        count
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hand::HandCatalog;
+    use crate::planning::hand_pose::{finger_frame, hand_pose};
+
+    fn grid_plane() -> Vec<Point3<f64>> {
+        (0..400)
+            .map(|i| Point3::new((i % 20) as f64 * 0.01 - 0.1, (i / 20) as f64 * 0.01 - 0.1, 0.0))
+            .collect()
+    }
+
+    #[test]
+    fn hand_above_the_table_is_clear_and_below_it_is_not() {
+        let c = HandCatalog::builtin();
+        let hand = c.get("parallel_gripper").unwrap();
+        let frame = finger_frame(&Vector3::x(), &[-Vector3::z()]).unwrap();
+        let table = Plane::through(&Point3::origin(), Vector3::z());
+        let pts = grid_plane();
+        let idx = CloudIndex::new(&pts);
+        let contacts = |z: f64| {
+            [
+                FingerContact { finger: 0, point: 0, position: Point3::new(-0.03, 0.0, z), normal: -Vector3::x() },
+                FingerContact { finger: 1, point: 1, position: Point3::new(0.03, 0.0, z), normal: Vector3::x() },
+            ]
+        };
+        // Contacts 5 cm up, palm 4 cm above them: clear of the table and its points.
+        let pose = hand_pose(&Point3::new(0.0, 0.0, 0.05), &frame, 0.04);
+        let posed = PosedHand::at_grasp(hand, &pose, &contacts(0.05), false);
+        assert!(posed.plane_clearance(&table) > 0.0);
+        assert_eq!(posed.points_inside(&pts, &idx, DEFAULT_TOLERANCE), 0);
+        // Contacts 5 mm up: the fingertips (radius 11 mm) reach into the table.
+        let pose = hand_pose(&Point3::new(0.0, 0.0, 0.005), &frame, 0.04);
+        let posed = PosedHand::at_grasp(hand, &pose, &contacts(0.005), false);
+        assert!(posed.plane_clearance(&table) < -0.005);
+        assert!(posed.points_inside(&pts, &idx, DEFAULT_TOLERANCE) > 0);
+    }
+
+    #[test]
+    fn open_fingers_span_the_aperture() {
+        let c = HandCatalog::builtin();
+        let hand = c.get("parallel_gripper").unwrap();
+        let frame = finger_frame(&Vector3::x(), &[-Vector3::z()]).unwrap();
+        let pose = hand_pose(&Point3::new(0.0, 0.0, 0.2), &frame, 0.0);
+        let open = PosedHand::open(hand, &pose, &[0, 1]);
+        // A point between the open fingers, under the palm, is not inside the hand.
+        let pts = vec![Point3::new(0.0, 0.0, 0.17); 1];
+        let idx = CloudIndex::new(&pts);
+        assert_eq!(open.points_inside(&pts, &idx, 0.0), 0);
+        let on_finger = vec![Point3::new(0.0425 + 0.011, 0.0, 0.2 - 0.03)];
+        let idx = CloudIndex::new(&on_finger);
+        assert_eq!(open.points_inside(&on_finger, &idx, 0.0), 1);
+    }
+}

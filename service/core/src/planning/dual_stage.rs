@@ -1,0 +1,490 @@
+//! Stage 2 and the orchestration of the dual-stage search (ch. 5.4.2, Algorithm 4).
+//!
+//! Stage 2 places the m final contacts C_g near the pregrasping opposition: the h1-side contacts in
+//! Φ(oc1, λ₂), the h2-side contacts in Φ(oc2, λ₂ + the fingers' half span) (Eq 5.6 with
+//! p_ref = C_o), maximising Q = 0.7·R + 0.3·G subject to S ≥ ε. Fingers on one side must be
+//! at least a finger width and at most the hand's splay apart, and every contact must push toward
+//! the other side. The "without opposition" ablation (Table 5.1) runs the same problem with every
+//! slot drawing from the whole cloud.
+
+use super::annealing::{Annealed, Schedule, Scored, SearchProblem, anneal};
+use super::opposition::OppositionSearch;
+use super::search_context::{
+    Assessment, MERIT_COLLIDING, MERIT_GEOMETRY, MERIT_UNSTABLE, SearchContext,
+};
+use super::types::{PlannerMode, StageStats};
+use rand::RngExt;
+use rand_chacha::ChaCha8Rng;
+use std::time::Instant;
+
+/// cos 75°: a contact's normal must point at least this much away from the other side.
+const MIN_PUSH_COS: f64 = 0.2588;
+
+/// Stage 2 (or the ablation) as a search problem: slots 0..k1 are the h1 side, the rest h2.
+pub struct ContactSearch<'c, 'a> {
+    pub ctx: &'c SearchContext<'a>,
+    pub slot_candidates: Vec<Vec<usize>>,
+    member: Vec<Vec<bool>>,
+    /// Which member table each slot uses (the h1 slots share one, the h2 slots another).
+    slot_member: Vec<usize>,
+    pub k1: usize,
+    pub weights: [f64; 2],
+}
+
+fn members(n: usize, idx: &[usize]) -> Vec<bool> {
+    let mut m = vec![false; n];
+    for &i in idx {
+        m[i] = true;
+    }
+    m
+}
+
+impl<'c, 'a> ContactSearch<'c, 'a> {
+    /// Stage 2 around the opposition (oc1, oc2).
+    pub fn around(ctx: &'c SearchContext<'a>, oc: (usize, usize), lambda: f64) -> Self {
+        let k1 = ctx.grasp.h1_count();
+        let k2 = ctx.grasp.h2_fingers.len();
+        let spacing = finger_spacing(ctx);
+        let c1 = ctx.index.within(&ctx.points[oc.0], lambda);
+        let c2 = ctx
+            .index
+            .within(&ctx.points[oc.1], lambda + 0.5 * (k2.saturating_sub(1)) as f64 * spacing);
+        let n = ctx.points.len();
+        let mut slot_candidates = vec![c1.clone(); k1];
+        slot_candidates.extend(std::iter::repeat_n(c2.clone(), k2));
+        let mut slot_member = vec![0; k1];
+        slot_member.extend(std::iter::repeat_n(1, k2));
+        Self {
+            ctx,
+            slot_candidates,
+            member: vec![members(n, &c1), members(n, &c2)],
+            slot_member,
+            k1,
+            weights: ctx.options.stage2_weights,
+        }
+    }
+
+    /// The ablation: every slot draws from the whole cloud.
+    pub fn whole_cloud(ctx: &'c SearchContext<'a>) -> Self {
+        let k1 = ctx.grasp.h1_count();
+        let m = ctx.grasp.contact_count();
+        let all: Vec<usize> = (0..ctx.points.len()).collect();
+        Self {
+            ctx,
+            slot_candidates: vec![all; m],
+            member: vec![vec![true; ctx.points.len()]],
+            slot_member: vec![0; m],
+            k1,
+            weights: ctx.options.stage2_weights,
+        }
+    }
+
+    /// |Φ_ĝ|: the product of the slots' candidate counts (ordered, as the text's 120³).
+    pub fn solution_space(&self) -> f64 {
+        self.slot_candidates
+            .iter()
+            .map(|c| c.len() as f64)
+            .product()
+    }
+
+    /// A start near the opposition: h1 slots at oc1's nearest candidates, h2 slots spread along
+    /// the opposition's lateral axis around oc2.
+    pub fn initial_around(&self, oc: (usize, usize), frame_y: &nalgebra::Vector3<f64>) -> Vec<usize> {
+        let ctx = self.ctx;
+        let k2 = self.slot_candidates.len() - self.k1;
+        let spacing = finger_spacing(ctx);
+        let mut used: Vec<usize> = Vec::new();
+        let mut nearest = |slot: usize, target: nalgebra::Point3<f64>| {
+            let best = self.slot_candidates[slot]
+                .iter()
+                .copied()
+                .filter(|i| !used.contains(i))
+                .min_by(|&a, &b| {
+                    (ctx.points[a] - target).norm_squared().total_cmp(&(ctx.points[b] - target).norm_squared())
+                })
+                .unwrap_or(self.slot_candidates[slot][0]);
+            used.push(best);
+            best
+        };
+        let mut config = Vec::with_capacity(self.slot_candidates.len());
+        for s in 0..self.k1 {
+            config.push(nearest(s, ctx.points[oc.0]));
+        }
+        for f in 0..k2 {
+            let off = (f as f64 - (k2 as f64 - 1.0) / 2.0) * spacing;
+            config.push(nearest(self.k1 + f, ctx.points[oc.1] + frame_y * off));
+        }
+        config
+    }
+
+    /// A random start with distinct points (the ablation starts without guidance).
+    pub fn initial_random(&self, rng: &mut ChaCha8Rng) -> Vec<usize> {
+        let mut config: Vec<usize> = Vec::new();
+        for cands in &self.slot_candidates {
+            let mut p = cands[rng.random_range(0..cands.len())];
+            for _ in 0..16 {
+                if !config.contains(&p) {
+                    break;
+                }
+                p = cands[rng.random_range(0..cands.len())];
+            }
+            config.push(p);
+        }
+        config
+    }
+
+    /// Stage-2 constraints and the shared assessment.
+    pub fn assess(&self, c: &[usize]) -> Assessment {
+        let ctx = self.ctx;
+        let (h1, h2) = c.split_at(self.k1);
+        let mut a = ctx.assess(h1, h2, self.weights);
+        for (k, i) in c.iter().enumerate() {
+            if c[..k].contains(i) {
+                a.violated(1.0, || "two contacts on the same point".into());
+            }
+        }
+        let Some(frame) = a.frame else { return a };
+        let mean = |idx: &[usize]| {
+            idx.iter()
+                .fold(nalgebra::Vector3::zeros(), |s, &i| s + ctx.points[i].coords)
+                / idx.len() as f64
+        };
+        let Some(closing) = (mean(h2) - mean(h1)).try_normalize(1e-9) else {
+            return a;
+        };
+        for &i in h1 {
+            let push = -ctx.normals[i].dot(&closing);
+            a.violated(MIN_PUSH_COS - push, || {
+                "an h1 contact's surface does not face away from the fingers".into()
+            });
+        }
+        for &i in h2 {
+            let push = ctx.normals[i].dot(&closing);
+            a.violated(MIN_PUSH_COS - push, || {
+                "an h2 contact's surface does not face away from the thumb side".into()
+            });
+        }
+        let geo = &ctx.hand.geometry;
+        let spread = ctx.hand.max_finger_spread();
+        for side in [h1, h2] {
+            if side.len() < 2 || (ctx.palm_opposition() && std::ptr::eq(side, h1)) {
+                continue;
+            }
+            let mut s: Vec<usize> = side.to_vec();
+            s.sort_by(|&p, &q| {
+                ctx.points[p].coords.dot(&frame.y).total_cmp(&ctx.points[q].coords.dot(&frame.y))
+            });
+            for w in s.windows(2) {
+                let d = (ctx.points[w[1]] - ctx.points[w[0]]).norm();
+                a.violated((0.9 * geo.finger_width - d) / geo.finger_width, || {
+                    format!("two fingers' contacts {:.1} mm apart, closer than a finger width", d * 1e3)
+                });
+                a.violated((d - spread) / spread, || {
+                    format!("neighbouring fingers' contacts {:.1} mm apart, beyond the hand's splay", d * 1e3)
+                });
+            }
+        }
+        a
+    }
+
+    /// Why a configuration is infeasible (None when it is feasible).
+    pub fn explain(&self, c: &[usize]) -> Option<String> {
+        let a = self.assess(c);
+        if a.violation > 0.0 {
+            return a.reason;
+        }
+        let s = self.ctx.stability(c);
+        if s < self.ctx.options.epsilon {
+            return Some(format!("S = {s:.3} < ε = {}", self.ctx.options.epsilon));
+        }
+        if self.ctx.options.check_collisions {
+            let (h1, h2) = c.split_at(self.k1);
+            let col = self.ctx.collisions(h1, h2, &a)?;
+            if !col.clear() {
+                return Some(col.describe());
+            }
+        }
+        None
+    }
+}
+
+/// Distance between neighbouring fingers' contacts to aim for: the mean spacing of the h2
+/// fingers' bases, at least a finger width.
+fn finger_spacing(ctx: &SearchContext) -> f64 {
+    let mut ys: Vec<f64> = ctx
+        .grasp
+        .h2_fingers
+        .iter()
+        .map(|&f| ctx.hand.fingers[f].base[1])
+        .collect();
+    ys.sort_by(f64::total_cmp);
+    let gaps: Vec<f64> = ys.windows(2).map(|w| w[1] - w[0]).collect();
+    let mean = if gaps.is_empty() {
+        0.0
+    } else {
+        gaps.iter().sum::<f64>() / gaps.len() as f64
+    };
+    mean.max(ctx.hand.geometry.finger_width * 1.1)
+}
+
+impl SearchProblem for ContactSearch<'_, '_> {
+    fn slots(&self) -> usize {
+        self.slot_candidates.len()
+    }
+    fn candidates(&self, slot: usize) -> &[usize] {
+        &self.slot_candidates[slot]
+    }
+    fn is_candidate(&self, slot: usize, p: usize) -> bool {
+        self.member[self.slot_member[slot]][p]
+    }
+    fn neighbours(&self, p: usize) -> &[usize] {
+        &self.ctx.neighbours[p]
+    }
+    fn evaluate(&mut self, c: &[usize], threshold: f64, best: f64) -> Scored {
+        let a = self.assess(c);
+        if a.violation > 0.0 {
+            return Scored {
+                merit: MERIT_GEOMETRY - a.violation,
+                feasible: false,
+            };
+        }
+        if a.q <= threshold {
+            return Scored {
+                merit: a.q,
+                feasible: false,
+            };
+        }
+        let eps = self.ctx.options.epsilon;
+        let s = self.ctx.stability(c);
+        if s < eps {
+            return Scored {
+                merit: MERIT_UNSTABLE - (eps - s),
+                feasible: false,
+            };
+        }
+        if a.q > best && self.ctx.options.check_collisions {
+            let (h1, h2) = c.split_at(self.k1);
+            if !self.ctx.collisions(h1, h2, &a).is_some_and(|col| col.clear()) {
+                return Scored {
+                    merit: MERIT_COLLIDING,
+                    feasible: false,
+                };
+            }
+        }
+        Scored {
+            merit: a.q,
+            feasible: true,
+        }
+    }
+}
+
+/// The result of the whole search.
+#[derive(Debug, Clone)]
+pub struct SearchOutcome {
+    /// Final contacts: the first `k1` on the h1 side.
+    pub contacts: Vec<usize>,
+    pub k1: usize,
+    /// The pregrasping opposition (oc1, oc2); for the ablation, the h1/h2 contacts nearest the
+    /// centroids of each side.
+    pub opposition: (usize, usize),
+    pub feasible: bool,
+    pub reason: Option<String>,
+    pub stage1: StageStats,
+    pub stage2: StageStats,
+    /// (ω_R, ω_G) of the stage that produced the final contacts.
+    pub final_weights: [f64; 2],
+}
+
+fn budget(ctx: &SearchContext, space: f64) -> Schedule {
+    let o = ctx.options;
+    let want = (o.iteration_fraction * space).ceil();
+    let iterations = if want.is_finite() {
+        (want as usize).clamp(o.min_iterations, o.max_iterations.max(o.min_iterations))
+    } else {
+        o.max_iterations
+    };
+    Schedule::new(iterations, o.min_iterations, o.patience)
+}
+
+fn add_run(stats: &mut StageStats, run: &Annealed) {
+    stats.iterations += run.iterations;
+    stats.evaluations += run.evaluations;
+    stats.accepted += run.accepted;
+    stats.feasible_found |= run.best.is_some();
+}
+
+/// λ₁: 0.6·a_max, bounded by how far the object extends from p_att and at least 2 cm.
+fn default_lambda1(ctx: &SearchContext) -> f64 {
+    let extent = ctx
+        .points
+        .iter()
+        .map(|p| (p - ctx.p_att).norm())
+        .fold(0.0, f64::max);
+    (0.6 * ctx.hand.geometry.max_aperture).min(extent * 1.01).max(0.02)
+}
+
+/// Runs stage 1 with bounded widenings of λ₁. Returns the oppositions to try in order (best first)
+/// and whether the best is feasible.
+fn stage_one(ctx: &SearchContext, rng: &mut ChaCha8Rng, stats: &mut StageStats) -> (Vec<Vec<usize>>, bool) {
+    let t = Instant::now();
+    let mut lambda = ctx.options.lambda1.unwrap_or_else(|| default_lambda1(ctx));
+    let mut fallback: Option<(Vec<usize>, f64)> = None;
+    let mut result = (Vec::new(), false);
+    for attempt in 0..=ctx.options.restarts {
+        let mut prob = OppositionSearch::new(ctx, lambda);
+        stats.candidates = prob.candidates.len();
+        stats.solution_space = prob.solution_space();
+        stats.restarts = attempt;
+        if prob.candidates.len() >= 2 {
+            let init = prob.initial(rng);
+            let sched = budget(ctx, prob.solution_space());
+            let run = anneal(&mut prob, init, sched, rng);
+            add_run(stats, &run);
+            if run.best.is_some() {
+                // Best first, then the earlier improvements as runners-up.
+                let mut list: Vec<Vec<usize>> =
+                    run.improvements.iter().rev().map(|(_, _, c)| c.clone()).collect();
+                list.dedup();
+                list.truncate(4);
+                result = (list, true);
+                break;
+            }
+            if fallback.as_ref().is_none_or(|f| run.best_any.1 > f.1) {
+                fallback = Some(run.best_any.clone());
+            }
+        }
+        lambda *= 1.5;
+    }
+    if !result.1 {
+        result.0 = fallback.map(|f| vec![f.0]).unwrap_or_default();
+    }
+    stats.seconds = t.elapsed().as_secs_f64();
+    result
+}
+
+/// Algorithm 4, lines 6–7 (or the ablation): the final contacts.
+pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome> {
+    let mut s1 = StageStats::default();
+    let mut s2 = StageStats::default();
+    let k1 = ctx.grasp.h1_count();
+    let m = ctx.grasp.contact_count();
+    if ctx.options.mode == PlannerMode::WithoutOpposition {
+        let t = Instant::now();
+        let mut prob = ContactSearch::whole_cloud(ctx);
+        s2.candidates = ctx.points.len();
+        s2.solution_space = prob.solution_space();
+        let mut best: Option<(Vec<usize>, f64, bool)> = None;
+        for attempt in 0..=ctx.options.restarts {
+            s2.restarts = attempt;
+            let init = prob.initial_random(rng);
+            let sched = budget(ctx, prob.solution_space());
+            let run = anneal(&mut prob, init, sched, rng);
+            add_run(&mut s2, &run);
+            let cand = match &run.best {
+                Some((c, q)) => (c.clone(), *q, true),
+                None => (run.best_any.0.clone(), run.best_any.1, false),
+            };
+            if best.as_ref().is_none_or(|b| (cand.2, cand.1) > (b.2, b.1)) {
+                best = Some(cand);
+            }
+            if best.as_ref().is_some_and(|b| b.2) {
+                break;
+            }
+        }
+        s2.seconds = t.elapsed().as_secs_f64();
+        let (contacts, _, feasible) = best?;
+        let reason = if feasible { None } else { prob.explain(&contacts) };
+        let opposition = (contacts[0], contacts[k1]);
+        return Some(SearchOutcome {
+            contacts,
+            k1,
+            opposition,
+            feasible,
+            reason,
+            stage1: s1,
+            stage2: s2,
+            final_weights: ctx.options.stage2_weights,
+        });
+    }
+
+    let (oppositions, stage1_ok) = stage_one(ctx, rng, &mut s1);
+    let first = oppositions.first()?.clone();
+    let stage1_reason = if stage1_ok {
+        None
+    } else {
+        OppositionSearch::new(ctx, 0.0).explain(&first).map(|r| format!("stage 1: {r}"))
+    };
+    if m == 2 {
+        // Two contacts: the pregrasping opposition is the final grasp (as for the P-Grip).
+        return Some(SearchOutcome {
+            contacts: first.clone(),
+            k1,
+            opposition: (first[0], first[1]),
+            feasible: stage1_ok,
+            reason: stage1_reason,
+            stage1: s1,
+            stage2: s2,
+            final_weights: ctx.options.stage1_weights,
+        });
+    }
+    let t = Instant::now();
+    let lambda2 = ctx
+        .options
+        .lambda2
+        .unwrap_or_else(|| ctx.hand.geometry.finger_width.max(0.02));
+    let mut fallback: Option<(Vec<usize>, f64, (usize, usize))> = None;
+    let mut found: Option<(Vec<usize>, (usize, usize))> = None;
+    'outer: for oc in &oppositions {
+        let oc = (oc[0], oc[1]);
+        let probe = OppositionSearch::new(ctx, 0.0);
+        let frame_y = probe
+            .assess(oc.0, oc.1)
+            .frame
+            .map(|f| f.y)
+            .unwrap_or_else(nalgebra::Vector3::y);
+        let mut lambda = lambda2;
+        for attempt in 0..=ctx.options.restarts {
+            let mut prob = ContactSearch::around(ctx, oc, lambda);
+            s2.candidates = s2.candidates.max(prob.slot_candidates.iter().map(Vec::len).max().unwrap_or(0));
+            s2.solution_space = s2.solution_space.max(prob.solution_space());
+            s2.restarts += usize::from(attempt > 0);
+            let init = prob.initial_around(oc, &frame_y);
+            let sched = budget(ctx, prob.solution_space());
+            let run = anneal(&mut prob, init, sched, rng);
+            add_run(&mut s2, &run);
+            if let Some((c, _)) = run.best {
+                found = Some((c, oc));
+                break 'outer;
+            }
+            if fallback.as_ref().is_none_or(|f| run.best_any.1 > f.1) {
+                fallback = Some((run.best_any.0.clone(), run.best_any.1, oc));
+            }
+            lambda *= 1.5;
+        }
+    }
+    s2.seconds = t.elapsed().as_secs_f64();
+    let (contacts, oc, feasible) = match found {
+        // A final grasp that meets every constraint is feasible even if stage 1 had to fall back.
+        Some((c, oc)) => (c, oc, true),
+        None => {
+            let (c, _, oc) = fallback?;
+            (c, oc, false)
+        }
+    };
+    let reason = if feasible {
+        None
+    } else {
+        let prob = ContactSearch::around(ctx, oc, lambda2);
+        stage1_reason.or_else(|| prob.explain(&contacts).map(|r| format!("stage 2: {r}")))
+    };
+    Some(SearchOutcome {
+        contacts,
+        k1,
+        opposition: oc,
+        feasible,
+        reason,
+        stage1: s1,
+        stage2: s2,
+        final_weights: ctx.options.stage2_weights,
+    })
+}

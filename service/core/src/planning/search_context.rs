@@ -1,0 +1,282 @@
+//! What both stages share: the object, the hand, the guidance (p_att, n_att) and the evaluation of
+//! a contact set against Eq 5.2 — hand frame, palm height, R, G, S, the hand's limits and the
+//! collision check. Stage-specific feasibility lives in `opposition.rs` and `dual_stage.rs`.
+
+use super::collision::{self, FingerContact, PosedHand};
+use super::hand_pose::{self, HandFrame, finger_frame, palm_frame};
+use super::object_shape::ObjectShape;
+use super::quality::{self, ContactPoint};
+use super::types::{Pose, PlannerOptions};
+use crate::cloud::{CloudIndex, Plane};
+use crate::grasp_type::HandPart;
+use crate::hand::{HandDescription, ResolvedGrasp};
+use nalgebra::{Point3, Vector3};
+
+/// Merit offsets: infeasible configurations rank below every feasible one (|Q| ≤ 2), those that
+/// break a geometric limit below those that only miss S ≥ ε or collide.
+pub const MERIT_UNSTABLE: f64 = -5.0;
+pub const MERIT_COLLIDING: f64 = -6.0;
+pub const MERIT_GEOMETRY: f64 = -10.0;
+
+/// The planner's view of one request.
+pub struct SearchContext<'a> {
+    pub points: &'a [Point3<f64>],
+    pub normals: &'a [Vector3<f64>],
+    pub index: &'a CloudIndex,
+    pub neighbours: &'a [Vec<usize>],
+    pub shape: &'a ObjectShape,
+    pub hand: &'a HandDescription,
+    pub grasp: &'a ResolvedGrasp,
+    pub p_att: Point3<f64>,
+    pub n_att: Vector3<f64>,
+    /// Approach directions in order of preference (−n_att first).
+    pub approach_prefs: Vec<Vector3<f64>>,
+    pub plane: Option<Plane>,
+    pub options: &'a PlannerOptions,
+    /// cos(atan μ): the friction-cone half-angle test.
+    pub cos_friction: f64,
+}
+
+/// A contact set assessed against the hand and Eq 5.2 (S and collision aside).
+#[derive(Debug, Clone)]
+pub struct Assessment {
+    /// Sum of normalised limit violations; 0 when every geometric constraint holds.
+    pub violation: f64,
+    pub reason: Option<String>,
+    pub frame: Option<HandFrame>,
+    /// Grasp centre (centroid of the contacts).
+    pub center: Point3<f64>,
+    /// a (opening or polygon area) and h of Eq 5.4.
+    pub a: f64,
+    pub h: f64,
+    pub r: f64,
+    pub g: f64,
+    pub q: f64,
+}
+
+impl Assessment {
+    pub fn violated(&mut self, amount: f64, reason: impl FnOnce() -> String) {
+        if amount > 0.0 {
+            if self.reason.is_none() {
+                self.reason = Some(reason());
+            }
+            self.violation += amount;
+        }
+    }
+}
+
+impl SearchContext<'_> {
+    pub fn contact(&self, i: usize) -> ContactPoint {
+        ContactPoint {
+            position: self.points[i],
+            normal: self.normals[i],
+        }
+    }
+
+    pub fn palm_opposition(&self) -> bool {
+        self.grasp.h1_part == HandPart::Palm
+    }
+
+    /// Hand frame, palm height, R, G and Q for contacts split into the h1 and h2 sides, with the
+    /// limits every stage shares: opening within [min_aperture, a_max], palm height ≤ h_max, grasp
+    /// centre near the object's centre. `weights` = (ω_R, ω_G); `a` is the opening for two contacts
+    /// and the grasp-polygon area for more.
+    pub fn assess(&self, h1: &[usize], h2: &[usize], weights: [f64; 2]) -> Assessment {
+        let mean = |idx: &[usize]| {
+            Point3::from(idx.iter().fold(Vector3::zeros(), |a, &i| a + self.points[i].coords) / idx.len() as f64)
+        };
+        let (c1, c2) = (mean(h1), mean(h2));
+        let all: Vec<usize> = h1.iter().chain(h2).copied().collect();
+        let center = mean(&all);
+        let d = c2 - c1;
+        let geo = &self.hand.geometry;
+        let mut out = Assessment {
+            violation: 0.0,
+            reason: None,
+            frame: None,
+            center,
+            a: 0.0,
+            h: 0.0,
+            r: 0.0,
+            g: -std::f64::consts::FRAC_PI_2,
+            q: f64::NEG_INFINITY,
+        };
+        // Opening: the largest h1–h2 distance must fit the hand, the smallest must not be below
+        // its closed width.
+        let (mut open_max, mut open_min) = (0.0f64, f64::INFINITY);
+        for &i in h1 {
+            for &j in h2 {
+                let dist = (self.points[j] - self.points[i]).norm();
+                open_max = open_max.max(dist);
+                open_min = open_min.min(dist);
+            }
+        }
+        out.violated((open_max - geo.max_aperture) / geo.max_aperture, || {
+            format!("opening {:.1} mm exceeds a_max {:.1} mm", open_max * 1e3, geo.max_aperture * 1e3)
+        });
+        out.violated((geo.min_aperture - open_min) / geo.max_aperture, || {
+            format!("opening {:.1} mm below the hand's minimum {:.1} mm", open_min * 1e3, geo.min_aperture * 1e3)
+        });
+        let frame = if self.palm_opposition() {
+            palm_frame(&d, &self.shape.axes[0])
+        } else {
+            finger_frame(&d, &self.approach_prefs)
+        };
+        let Some(frame) = frame else {
+            out.violated(1.0, || "contacts coincide".into());
+            return out;
+        };
+        let clearance = if self.palm_opposition() {
+            0.0
+        } else if self.grasp.h1_part.is_tip() {
+            0.01
+        } else {
+            0.005
+        };
+        let h = hand_pose::palm_height(self.shape, &center, &frame, clearance);
+        out.violated((h - geo.max_height) / geo.max_height, || {
+            format!(
+                "palm would stand {:.1} mm behind the grasp centre, beyond h_max {:.1} mm",
+                h * 1e3,
+                geo.max_height * 1e3
+            )
+        });
+        let offset = center - self.shape.center;
+        let off = (offset - frame.z * offset.dot(&frame.z)).norm();
+        let max_off = self.options.max_center_offset * self.shape.radius;
+        out.violated((off - max_off) / self.shape.radius.max(1e-6), || {
+            format!(
+                "grasp centre {:.1} mm off the object's centre (limit {:.1} mm)",
+                off * 1e3,
+                max_off * 1e3
+            )
+        });
+        let m = all.len();
+        let a = if m <= 2 {
+            d.norm()
+        } else {
+            let pts: Vec<Point3<f64>> = all.iter().map(|&i| self.points[i]).collect();
+            quality::polygon_area(&pts)
+        };
+        let r = quality::reachability(a, h, self.hand.a_max(m), geo.max_height);
+        let g = if self.palm_opposition() {
+            quality::attention_palm(&self.n_att, &d)
+        } else {
+            quality::attention(&self.n_att, &d)
+        };
+        out.frame = Some(frame);
+        out.a = a;
+        out.h = h;
+        out.r = r;
+        out.g = g;
+        out.q = weights[0] * r + weights[1] * g;
+        out
+    }
+
+    /// S of Eq 5.3 for the contacts (with a palm contact modelled as a soft contact too).
+    pub fn stability(&self, idx: &[usize]) -> f64 {
+        let c: Vec<ContactPoint> = idx.iter().map(|&i| self.contact(i)).collect();
+        quality::gii(&c, self.options.torsion_gamma)
+    }
+
+    /// The contacts assigned to fingers: h2 contacts in order of their lateral coordinate go to
+    /// the h2 fingers in order of their bases' y (likewise h1); a palm contact gets no finger.
+    pub fn finger_contacts(&self, h1: &[usize], h2: &[usize], frame: &HandFrame) -> Vec<FingerContact> {
+        let mut out = Vec::with_capacity(h1.len() + h2.len());
+        let mut assign = |idx: &[usize], fingers: &[usize]| {
+            let mut pts: Vec<usize> = idx.to_vec();
+            pts.sort_by(|&a, &b| self.points[a].coords.dot(&frame.y).total_cmp(&self.points[b].coords.dot(&frame.y)));
+            let mut fs: Vec<usize> = fingers.to_vec();
+            fs.sort_by(|&a, &b| self.hand.fingers[a].base[1].total_cmp(&self.hand.fingers[b].base[1]));
+            for (p, f) in pts.iter().zip(fs) {
+                out.push(FingerContact {
+                    finger: f,
+                    point: *p,
+                    position: self.points[*p],
+                    normal: self.normals[*p],
+                });
+            }
+        };
+        if !self.palm_opposition() {
+            assign(h1, &self.grasp.h1_fingers);
+        }
+        assign(h2, &self.grasp.h2_fingers);
+        out
+    }
+
+    /// Grasp and pre-grasp poses of an assessed contact set.
+    pub fn poses(&self, a: &Assessment) -> Option<(Pose, Pose, HandFrame)> {
+        let frame = a.frame?;
+        let pose = hand_pose::hand_pose(&a.center, &frame, a.h);
+        let pre = hand_pose::pregrasp_pose(&pose, &frame, self.options.pregrasp_distance);
+        Some((pose, pre, frame))
+    }
+
+    /// Collision counts of the posed hand: (final, pre-grasp, approach, plane clearance).
+    pub fn collisions(&self, h1: &[usize], h2: &[usize], a: &Assessment) -> Option<CollisionCounts> {
+        let (pose, pre, frame) = self.poses(a)?;
+        let fingers = self.finger_contacts(h1, h2, &frame);
+        let used: Vec<usize> = fingers.iter().map(|f| f.finger).collect();
+        let at_grasp = PosedHand::at_grasp(self.hand, &pose, &fingers, self.palm_opposition());
+        let open_pre = PosedHand::open(self.hand, &pre, &used);
+        // Approach: halfway between pre-grasp and grasp, fingers still open.
+        let mid = Pose {
+            position: Point3::from((pose.position.coords + pre.position.coords) / 2.0),
+            orientation: pose.orientation,
+        };
+        let open_mid = PosedHand::open(self.hand, &mid, &used);
+        let tol = collision::DEFAULT_TOLERANCE;
+        let count = |h: &PosedHand| h.points_inside(self.points, self.index, tol);
+        let plane_clearance = self.plane.map(|pl| {
+            [&at_grasp, &open_pre, &open_mid]
+                .iter()
+                .map(|h| h.plane_clearance(&pl))
+                .fold(f64::INFINITY, f64::min)
+        });
+        Some(CollisionCounts {
+            final_points: count(&at_grasp),
+            pregrasp_points: count(&open_pre),
+            approach_points: count(&open_mid),
+            plane_clearance,
+        })
+    }
+}
+
+/// Collision counts of one configuration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CollisionCounts {
+    pub final_points: usize,
+    pub pregrasp_points: usize,
+    pub approach_points: usize,
+    pub plane_clearance: Option<f64>,
+}
+
+impl CollisionCounts {
+    /// Clear of the cloud (fewer than the noise allowance of points inside) and of the plane
+    /// (1 mm tolerance).
+    pub fn clear(&self) -> bool {
+        let n = collision::DEFAULT_MIN_POINTS;
+        self.final_points < n
+            && self.pregrasp_points < n
+            && self.approach_points < n
+            && self.plane_clearance.is_none_or(|c| c >= -0.001)
+    }
+
+    pub fn describe(&self) -> String {
+        let mut parts = Vec::new();
+        if let Some(c) = self.plane_clearance.filter(|c| *c < -0.001) {
+            parts.push(format!("hand reaches {:.1} mm below the support plane", -c * 1e3));
+        }
+        let n = collision::DEFAULT_MIN_POINTS;
+        for (what, k) in [
+            ("final grasp", self.final_points),
+            ("pre-grasp", self.pregrasp_points),
+            ("approach", self.approach_points),
+        ] {
+            if k >= n {
+                parts.push(format!("{k} cloud points inside the hand at the {what}"));
+            }
+        }
+        parts.join("; ")
+    }
+}
