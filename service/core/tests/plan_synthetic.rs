@@ -64,10 +64,10 @@ fn input(points: Vec<Point3<f64>>, hand: &str, view: Point3<f64>, seed: u64) -> 
 
 fn report(p: &graspd_core::GraspPlan) -> String {
     format!(
-        "{} {:?} feasible={} reason={:?} S={:.3} R={:.3} G={:.3} Q={:.3} eps={:.4} a={:.4} h={:.4} it1={} it2={} t={:.2}ms col={:?} warn={:?}",
+        "{} {:?} feasible={} reason={:?} S={:.3} R={:.3} G={:.3} Q={:.3} eps={:.4} a={:.4} h={:.4} it1={} it2={} t={:.2}ms timings={:?} col={:?} warn={:?}",
         p.hand, p.grasp_type, p.feasible, p.infeasible_reason, p.quality.gii, p.quality.reachability,
         p.quality.attention, p.quality.objective, p.quality.epsilon, p.quality.aperture_or_area,
-        p.quality.palm_height, p.stage1.iterations, p.stage2.iterations, p.timings.total * 1e3,
+        p.quality.palm_height, p.stage1.iterations, p.stage2.iterations, p.timings.total * 1e3, p.timings,
         p.collision, p.warnings
     )
 }

@@ -2,6 +2,7 @@
 
 pub mod io;
 pub mod normals;
+pub mod pca;
 pub mod plane;
 pub mod point_cloud;
 

@@ -2,7 +2,7 @@
 //! shares for its neighbourhood queries (Eq 5.6).
 
 use kiddo::{KdTree, SquaredEuclidean};
-use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
+use nalgebra::{Point3, Vector3};
 
 /// A k-d tree over the cloud's points (kiddo), indexed by point number.
 pub struct CloudIndex {
@@ -22,6 +22,15 @@ impl CloudIndex {
     pub fn nearest(&self, p: &Point3<f64>, k: usize) -> Vec<usize> {
         self.tree
             .nearest_n::<SquaredEuclidean>(&[p.x, p.y, p.z], k)
+            .into_iter()
+            .map(|n| n.item as usize)
+            .collect()
+    }
+
+    /// Indices of the points closer than `radius`, in no particular order.
+    pub fn within_unsorted(&self, p: &Point3<f64>, radius: f64) -> Vec<usize> {
+        self.tree
+            .within_unsorted::<SquaredEuclidean>(&[p.x, p.y, p.z], radius * radius)
             .into_iter()
             .map(|n| n.item as usize)
             .collect()
@@ -72,20 +81,8 @@ pub fn normals_from_neighbours(
 ) -> Vec<Vector3<f64>> {
     let mut normals = Vec::with_capacity(points.len());
     for nb in neighbours {
-        let mean = nb.iter().fold(Vector3::zeros(), |a, &i| a + points[i].coords) / nb.len() as f64;
-        let mut cov = Matrix3::zeros();
-        for &i in nb {
-            let d = points[i].coords - mean;
-            cov += d * d.transpose();
-        }
-        let eig = SymmetricEigen::new(cov);
-        let imin = eig.eigenvalues.imin();
-        let mut n: Vector3<f64> = eig.eigenvectors.column(imin).into_owned();
-        if !n.iter().all(|v| v.is_finite()) || n.norm() < 1e-12 {
-            n = Vector3::z();
-        }
-        n.normalize_mut();
-        normals.push(n);
+        let (_, cov) = super::pca::covariance(points, nb.iter().copied());
+        normals.push(super::pca::smallest_axis(&cov));
     }
     orient_normals(points, &mut normals, orient);
     normals

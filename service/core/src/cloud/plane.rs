@@ -1,7 +1,7 @@
 //! The support plane: given by the caller, or found by RANSAC and removed from the cloud.
 
 use crate::error::FieldError;
-use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
+use nalgebra::{Point3, Vector3};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -76,15 +76,8 @@ fn fit_plane_lsq(points: &[Point3<f64>], idx: &[usize]) -> Option<Plane> {
     if idx.len() < 3 {
         return None;
     }
-    let mean = idx.iter().fold(Vector3::zeros(), |a, &i| a + points[i].coords) / idx.len() as f64;
-    let mut cov = Matrix3::zeros();
-    for &i in idx {
-        let d = points[i].coords - mean;
-        cov += d * d.transpose();
-    }
-    let eig = SymmetricEigen::new(cov);
-    let n: Vector3<f64> = eig.eigenvectors.column(eig.eigenvalues.imin()).into_owned();
-    (n.norm() > 0.5).then(|| Plane::through(&Point3::from(mean), n))
+    let (mean, cov) = super::pca::covariance(points, idx.iter().copied());
+    Some(Plane::through(&mean, super::pca::smallest_axis(&cov)))
 }
 
 /// Finds a support plane by RANSAC (seeded), refines it by least squares and accepts it only if

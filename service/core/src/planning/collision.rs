@@ -12,7 +12,7 @@ use crate::cloud::{CloudIndex, Plane};
 use crate::hand::HandDescription;
 use nalgebra::{Point3, Vector3};
 use parry3d_f64::math::{Pose3, Rot3, Vector as PVec};
-use parry3d_f64::query::PointQuery;
+use parry3d_f64::query::PointQuery; // contains_local_point
 use parry3d_f64::shape::{Capsule, Cuboid};
 
 /// Penetration depth below which a point is touching, not colliding, m.
@@ -136,43 +136,41 @@ impl PosedHand {
             .fold(palm, f64::min)
     }
 
-    /// Number of cloud points deeper than `tolerance` inside the hand geometry.
-    pub fn points_inside(&self, points: &[Point3<f64>], index: &CloudIndex, tolerance: f64) -> usize {
-        let mut hit = vec![false; 0];
-        let mut count = 0usize;
-        let mut mark = |i: usize, hit: &mut Vec<bool>| {
-            if hit.is_empty() {
-                hit.resize(points.len(), false);
-            }
-            if !hit[i] {
-                hit[i] = true;
-                count += 1;
-            }
-        };
-        // Palm box.
+    /// Number of cloud points deeper than `tolerance` inside the hand geometry, counting at most
+    /// `limit` (the search only needs to know whether a configuration collides).
+    pub fn points_inside(&self, points: &[Point3<f64>], index: &CloudIndex, tolerance: f64, limit: usize) -> usize {
+        // "Deeper than the tolerance inside a shape" = inside the shape shrunk by the tolerance;
+        // points are tested in each shape's local frame (cheap exact tests, no projections).
+        let mut seen: Vec<usize> = Vec::new();
         let he = self.palm.half_extents;
-        let center = Point3::new(
-            self.palm_pose.translation.x,
-            self.palm_pose.translation.y,
-            self.palm_pose.translation.z,
-        );
-        for i in index.within(&center, he.length()) {
-            let proj = self.palm.project_point(&self.palm_pose, pv(&points[i]), true);
-            if proj.is_inside && (proj.point - pv(&points[i])).length() > tolerance {
-                mark(i, &mut hit);
+        let shrunk = Cuboid::new(PVec::new(
+            (he.x - tolerance).max(1e-6),
+            (he.y - tolerance).max(1e-6),
+            (he.z - tolerance).max(1e-6),
+        ));
+        let t = self.palm_pose.translation;
+        for i in index.within_unsorted(&Point3::new(t.x, t.y, t.z), he.length()) {
+            let local = self.palm_pose.inverse_transform_point(pv(&points[i]));
+            if shrunk.contains_local_point(local) {
+                seen.push(i);
+                if seen.len() >= limit {
+                    return seen.len();
+                }
             }
         }
         for (a, b, r) in &self.capsules {
             let mid = Point3::from((a.coords + b.coords) / 2.0);
-            let cap = Capsule::new(pv(a), pv(b), *r);
-            for i in index.within(&mid, (b - a).norm() / 2.0 + r) {
-                let proj = cap.project_point(&Pose3::IDENTITY, pv(&points[i]), true);
-                if proj.is_inside && (proj.point - pv(&points[i])).length() > tolerance {
-                    mark(i, &mut hit);
+            let cap = Capsule::new(pv(a), pv(b), (r - tolerance).max(1e-6));
+            for i in index.within_unsorted(&mid, (b - a).norm() / 2.0 + r) {
+                if !seen.contains(&i) && cap.contains_local_point(pv(&points[i])) {
+                    seen.push(i);
+                    if seen.len() >= limit {
+                        return seen.len();
+                    }
                 }
             }
         }
-        count
+        seen.len()
     }
 }
 
@@ -206,12 +204,12 @@ mod tests {
         let pose = hand_pose(&Point3::new(0.0, 0.0, 0.05), &frame, 0.04);
         let posed = PosedHand::at_grasp(hand, &pose, &contacts(0.05), false);
         assert!(posed.plane_clearance(&table) > 0.0);
-        assert_eq!(posed.points_inside(&pts, &idx, DEFAULT_TOLERANCE), 0);
+        assert_eq!(posed.points_inside(&pts, &idx, DEFAULT_TOLERANCE, usize::MAX), 0);
         // Contacts 5 mm up: the fingertips (radius 11 mm) reach into the table.
         let pose = hand_pose(&Point3::new(0.0, 0.0, 0.005), &frame, 0.04);
         let posed = PosedHand::at_grasp(hand, &pose, &contacts(0.005), false);
         assert!(posed.plane_clearance(&table) < -0.005);
-        assert!(posed.points_inside(&pts, &idx, DEFAULT_TOLERANCE) > 0);
+        assert!(posed.points_inside(&pts, &idx, DEFAULT_TOLERANCE, usize::MAX) > 0);
     }
 
     #[test]
@@ -224,9 +222,9 @@ mod tests {
         // A point between the open fingers, under the palm, is not inside the hand.
         let pts = vec![Point3::new(0.0, 0.0, 0.17); 1];
         let idx = CloudIndex::new(&pts);
-        assert_eq!(open.points_inside(&pts, &idx, 0.0), 0);
+        assert_eq!(open.points_inside(&pts, &idx, 0.0, usize::MAX), 0);
         let on_finger = vec![Point3::new(0.0425 + 0.011, 0.0, 0.2 - 0.03)];
         let idx = CloudIndex::new(&on_finger);
-        assert_eq!(open.points_inside(&on_finger, &idx, 0.0), 1);
+        assert_eq!(open.points_inside(&on_finger, &idx, 0.0, usize::MAX), 1);
     }
 }

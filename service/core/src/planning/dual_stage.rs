@@ -264,7 +264,7 @@ impl SearchProblem for ContactSearch<'_, '_> {
         }
         if a.q > best && self.ctx.options.check_collisions {
             let (h1, h2) = c.split_at(self.k1);
-            if !self.ctx.collisions(h1, h2, &a).is_some_and(|col| col.clear()) {
+            if self.ctx.collides(h1, h2, &a) {
                 return Scored {
                     merit: MERIT_COLLIDING,
                     feasible: false,
@@ -307,6 +307,9 @@ fn budget(ctx: &SearchContext, space: f64) -> Schedule {
 }
 
 fn add_run(stats: &mut StageStats, run: &Annealed) {
+    if let Some((k, _, _)) = run.improvements.last() {
+        stats.best_iteration = stats.iterations + k;
+    }
     stats.iterations += run.iterations;
     stats.evaluations += run.evaluations;
     stats.accepted += run.accepted;

@@ -2,7 +2,7 @@
 //! axes and extents (for the geometric type rule), and the convex-hull vertices used to place the
 //! palm clear of the object (h of Eq 5.4).
 
-use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
+use nalgebra::{Point3, Vector3};
 use parry3d_f64::math::Vector as PVec;
 use parry3d_f64::transformation::try_convex_hull;
 
@@ -28,15 +28,9 @@ impl ObjectShape {
             .iter()
             .map(|p| (p - center).norm())
             .fold(0.0, f64::max);
-        let mut cov = Matrix3::zeros();
-        for p in points {
-            let d = p - center;
-            cov += d * d.transpose();
-        }
-        let eig = SymmetricEigen::new(cov);
-        let mut order = [0usize, 1, 2];
-        order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
-        let mut axes = order.map(|i| eig.eigenvectors.column(i).into_owned().normalize());
+        let (_, cov) = crate::cloud::pca::covariance(points, 0..points.len());
+        let (_, vecs) = crate::cloud::pca::eigen(&cov);
+        let mut axes = [vecs[2], vecs[1], vecs[0]];
         axes[2] = axes[0].cross(&axes[1]);
         let mut extents = axes.map(|a| {
             let (lo, hi) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {

@@ -165,11 +165,7 @@ impl SearchProblem for OppositionSearch<'_, '_> {
             };
         }
         if a.q > best && self.ctx.options.check_collisions {
-            let clear = self
-                .ctx
-                .collisions(&c[..1], &c[1..], &a)
-                .is_some_and(|col| col.clear());
-            if !clear {
+            if self.ctx.collides(&c[..1], &c[1..], &a) {
                 return Scored {
                     merit: MERIT_COLLIDING,
                     feasible: false,

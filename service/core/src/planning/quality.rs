@@ -1,7 +1,7 @@
 //! Grasp quality measures of the dual-stage planner (dissertation ch. 5.4.1): stability S as the
 //! Grasp Isotropy Index (Eq 5.3), reachability R (Eq 5.4) and attention G (Eq 5.5).
 
-use nalgebra::{Matrix6, Point3, SymmetricEigen, Vector3, Vector6};
+use nalgebra::{Matrix6, Point3, Vector3, Vector6};
 
 /// A contact as the quality measures see it: a position and the object's outward unit normal.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -64,7 +64,7 @@ pub fn gii(contacts: &[ContactPoint], gamma: f64) -> f64 {
     let Some(ggt) = soft_finger_ggt(contacts, gamma) else {
         return 0.0;
     };
-    let ev = SymmetricEigen::new(ggt).eigenvalues;
+    let ev = ggt.symmetric_eigenvalues();
     let (lo, hi) = ev
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(l, h), &v| (l.min(v), h.max(v)));
@@ -116,20 +116,13 @@ pub fn polygon_area(points: &[Point3<f64>]) -> f64 {
     if points.len() < 3 {
         return 0.0;
     }
-    let c = points.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / points.len() as f64;
-    let mut cov = nalgebra::Matrix3::zeros();
-    for p in points {
-        let d = p.coords - c;
-        cov += d * d.transpose();
-    }
-    let eig = SymmetricEigen::new(cov);
-    let imin = eig.eigenvalues.imin();
-    let n: Vector3<f64> = eig.eigenvectors.column(imin).into_owned();
+    let (c, cov) = crate::cloud::pca::covariance(points, 0..points.len());
+    let n = crate::cloud::pca::smallest_axis(&cov);
     let (u, v) = tangents(&n);
     let mut pts2: Vec<(f64, f64)> = points
         .iter()
         .map(|p| {
-            let d = p.coords - c;
+            let d = p - c;
             (d.dot(&u), d.dot(&v))
         })
         .collect();

@@ -212,35 +212,56 @@ impl SearchContext<'_> {
         Some((pose, pre, frame))
     }
 
-    /// Collision counts of the posed hand: (final, pre-grasp, approach, plane clearance).
-    pub fn collisions(&self, h1: &[usize], h2: &[usize], a: &Assessment) -> Option<CollisionCounts> {
+    /// The hand posed at the grasp, at the pre-grasp and halfway along the approach (open).
+    fn posed(&self, h1: &[usize], h2: &[usize], a: &Assessment) -> Option<[PosedHand; 3]> {
         let (pose, pre, frame) = self.poses(a)?;
         let fingers = self.finger_contacts(h1, h2, &frame);
         let used: Vec<usize> = fingers.iter().map(|f| f.finger).collect();
-        let at_grasp = PosedHand::at_grasp(self.hand, &pose, &fingers, self.palm_opposition());
-        let open_pre = PosedHand::open(self.hand, &pre, &used);
-        // Approach: halfway between pre-grasp and grasp, fingers still open.
         let mid = Pose {
             position: Point3::from((pose.position.coords + pre.position.coords) / 2.0),
             orientation: pose.orientation,
         };
-        let open_mid = PosedHand::open(self.hand, &mid, &used);
-        let tol = collision::DEFAULT_TOLERANCE;
-        let count = |h: &PosedHand| h.points_inside(self.points, self.index, tol);
+        Some([
+            PosedHand::at_grasp(self.hand, &pose, &fingers, self.palm_opposition()),
+            PosedHand::open(self.hand, &pre, &used),
+            PosedHand::open(self.hand, &mid, &used),
+        ])
+    }
+
+    /// Whether the posed hand collides (search-time test: plane first, early exit).
+    pub fn collides(&self, h1: &[usize], h2: &[usize], a: &Assessment) -> bool {
+        let Some(hands) = self.posed(h1, h2, a) else {
+            return true;
+        };
+        if let Some(pl) = self.plane {
+            if hands.iter().any(|h| h.plane_clearance(&pl) < -PLANE_TOLERANCE) {
+                return true;
+            }
+        }
+        let n = collision::DEFAULT_MIN_POINTS;
+        hands
+            .iter()
+            .any(|h| h.points_inside(self.points, self.index, collision::DEFAULT_TOLERANCE, n) >= n)
+    }
+
+    /// Collision counts of the posed hand for the report.
+    pub fn collisions(&self, h1: &[usize], h2: &[usize], a: &Assessment) -> Option<CollisionCounts> {
+        let hands = self.posed(h1, h2, a)?;
+        let count = |h: &PosedHand| h.points_inside(self.points, self.index, collision::DEFAULT_TOLERANCE, usize::MAX);
         let plane_clearance = self.plane.map(|pl| {
-            [&at_grasp, &open_pre, &open_mid]
-                .iter()
-                .map(|h| h.plane_clearance(&pl))
-                .fold(f64::INFINITY, f64::min)
+            hands.iter().map(|h| h.plane_clearance(&pl)).fold(f64::INFINITY, f64::min)
         });
         Some(CollisionCounts {
-            final_points: count(&at_grasp),
-            pregrasp_points: count(&open_pre),
-            approach_points: count(&open_mid),
+            final_points: count(&hands[0]),
+            pregrasp_points: count(&hands[1]),
+            approach_points: count(&hands[2]),
             plane_clearance,
         })
     }
 }
+
+/// How far the hand may reach below the support plane (contact with the table surface), m.
+pub const PLANE_TOLERANCE: f64 = 0.001;
 
 /// Collision counts of one configuration.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -259,12 +280,12 @@ impl CollisionCounts {
         self.final_points < n
             && self.pregrasp_points < n
             && self.approach_points < n
-            && self.plane_clearance.is_none_or(|c| c >= -0.001)
+            && self.plane_clearance.is_none_or(|c| c >= -PLANE_TOLERANCE)
     }
 
     pub fn describe(&self) -> String {
         let mut parts = Vec::new();
-        if let Some(c) = self.plane_clearance.filter(|c| *c < -0.001) {
+        if let Some(c) = self.plane_clearance.filter(|c| *c < -PLANE_TOLERANCE) {
             parts.push(format!("hand reaches {:.1} mm below the support plane", -c * 1e3));
         }
         let n = collision::DEFAULT_MIN_POINTS;

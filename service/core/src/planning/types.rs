@@ -185,6 +185,8 @@ pub struct StageStats {
     /// Candidate points per contact slot (the union of the neighbourhoods).
     pub candidates: usize,
     pub iterations: usize,
+    /// Iteration (summed over restarts) at which the returned configuration was first found.
+    pub best_iteration: usize,
     pub evaluations: usize,
     pub accepted: usize,
     pub restarts: usize,
