@@ -6,6 +6,8 @@ pub mod pca;
 pub mod plane;
 pub mod point_cloud;
 
-pub use normals::{CloudIndex, Orientation, estimate_normals, knn_lists, normals_from_neighbours};
+pub use normals::{
+    CloudIndex, LazyNormals, Orientation, estimate_normals, knn_lists, normals_from_neighbours,
+};
 pub use plane::{Plane, RansacParams, detect_support_plane};
 pub use point_cloud::{MIN_POINTS, PointCloud, decode_packed_vec3, decode_packed_xyz, encode_packed_xyz};

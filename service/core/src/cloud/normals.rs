@@ -3,6 +3,7 @@
 
 use kiddo::{KdTree, SquaredEuclidean};
 use nalgebra::{Point3, Vector3};
+use std::cell::OnceCell;
 
 /// A k-d tree over the cloud's points (kiddo), indexed by point number.
 pub struct CloudIndex {
@@ -88,6 +89,65 @@ pub fn normals_from_neighbours(
     normals
 }
 
+/// Normals and k-NN lists computed on first use: the planner looks at a few hundred points of a
+/// cloud of thousands (its thinned neighbourhoods and contacts), so eager per-point PCA would
+/// dominate the plan's time.
+pub struct LazyNormals<'a> {
+    points: &'a [Point3<f64>],
+    index: &'a CloudIndex,
+    k: usize,
+    orient: Orientation,
+    centroid: Point3<f64>,
+    given: Option<Vec<Vector3<f64>>>,
+    normals: Vec<OnceCell<Vector3<f64>>>,
+    neighbours: Vec<OnceCell<Vec<usize>>>,
+}
+
+impl<'a> LazyNormals<'a> {
+    /// Normals estimated by k-NN PCA, oriented by `orient`; or `given` ones (one per point,
+    /// unit length, used as they are).
+    pub fn new(
+        points: &'a [Point3<f64>],
+        index: &'a CloudIndex,
+        k: usize,
+        orient: Orientation,
+        given: Option<Vec<Vector3<f64>>>,
+    ) -> Self {
+        Self {
+            points,
+            index,
+            k: k.clamp(3, points.len().max(3)),
+            orient,
+            centroid: super::point_cloud::centroid(points),
+            given,
+            normals: (0..points.len()).map(|_| OnceCell::new()).collect(),
+            neighbours: (0..points.len()).map(|_| OnceCell::new()).collect(),
+        }
+    }
+
+    /// The k nearest neighbours of point `i` (itself first).
+    pub fn neighbours(&self, i: usize) -> &[usize] {
+        self.neighbours[i].get_or_init(|| self.index.nearest(&self.points[i], self.k))
+    }
+
+    /// The unit outward normal of point `i`.
+    pub fn get(&self, i: usize) -> Vector3<f64> {
+        if let Some(g) = &self.given {
+            return g[i];
+        }
+        *self.normals[i].get_or_init(|| {
+            let (_, cov) = super::pca::covariance(self.points, self.neighbours(i).iter().copied());
+            let n = super::pca::smallest_axis(&cov);
+            let p = self.points[i];
+            let out = match self.orient {
+                Orientation::TowardViewpoint(v) => v - p,
+                Orientation::AwayFromCentroid => p - self.centroid,
+            };
+            if n.dot(&out) < 0.0 { -n } else { n }
+        })
+    }
+}
+
 /// Which way normals point.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Orientation {
@@ -152,6 +212,18 @@ mod tests {
             Orientation::TowardViewpoint(Point3::new(0.0, 0.0, -1.0)),
         );
         assert!(down.iter().all(|n| (n.z + 1.0).abs() < 1e-9));
+    }
+
+    #[test]
+    fn lazy_normals_equal_eager_ones() {
+        let pts = sphere(800, 0.05);
+        let idx = CloudIndex::new(&pts);
+        let eager = estimate_normals(&pts, &idx, 12, Orientation::AwayFromCentroid);
+        let lazy = LazyNormals::new(&pts, &idx, 12, Orientation::AwayFromCentroid, None);
+        for i in [0, 5, 400, 799] {
+            assert!((lazy.get(i) - eager[i]).norm() < 1e-12);
+        }
+        assert_eq!(lazy.neighbours(5)[0], 5);
     }
 
     #[test]

@@ -29,8 +29,8 @@ pub trait SearchProblem {
     fn slots(&self) -> usize;
     fn candidates(&self, slot: usize) -> &[usize];
     fn is_candidate(&self, slot: usize, point: usize) -> bool;
-    /// k-NN neighbours of a point (local moves).
-    fn neighbours(&self, point: usize) -> &[usize];
+    /// Neighbours of a point inside the slot's candidate set (local moves).
+    fn neighbours(&self, slot: usize, point: usize) -> &[usize];
     /// Scores `config`. A candidate whose merit cannot exceed `threshold` may be answered early
     /// with any merit ≤ `threshold` and `feasible: false`. A feasible candidate whose merit
     /// exceeds `best` (a new optimum) must be fully checked.
@@ -87,7 +87,7 @@ fn propose<P: SearchProblem>(p: &P, config: &[usize], rng: &mut ChaCha8Rng) -> V
     let slot = rng.random_range(0..p.slots());
     let taken = |q: usize, c: &[usize]| c.contains(&q);
     if rng.random_bool(0.75) {
-        let nb = p.neighbours(config[slot]);
+        let nb = p.neighbours(slot, config[slot]);
         for _ in 0..6 {
             if nb.is_empty() {
                 break;
@@ -184,7 +184,7 @@ mod tests {
         fn is_candidate(&self, _: usize, p: usize) -> bool {
             p < 100
         }
-        fn neighbours(&self, p: usize) -> &[usize] {
+        fn neighbours(&self, _: usize, p: usize) -> &[usize] {
             &self.nb[p]
         }
         fn evaluate(&mut self, c: &[usize], _: f64, _: f64) -> Scored {

@@ -12,7 +12,9 @@ use super::opposition::OppositionSearch;
 use super::search_context::{
     Assessment, MERIT_COLLIDING, MERIT_GEOMETRY, MERIT_UNSTABLE, SearchContext,
 };
+use super::slot_set::SlotSet;
 use super::types::{PlannerMode, StageStats};
+use nalgebra::{Point3, Vector3};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
@@ -23,42 +25,34 @@ const MIN_PUSH_COS: f64 = 0.2588;
 /// Stage 2 (or the ablation) as a search problem: slots 0..k1 are the h1 side, the rest h2.
 pub struct ContactSearch<'c, 'a> {
     pub ctx: &'c SearchContext<'a>,
-    pub slot_candidates: Vec<Vec<usize>>,
-    member: Vec<Vec<bool>>,
-    /// Which member table each slot uses (the h1 slots share one, the h2 slots another).
-    slot_member: Vec<usize>,
+    pub slots: Vec<SlotSet>,
+    /// Where each slot's contact is aimed (stage 2); empty for the ablation.
+    targets: Vec<Point3<f64>>,
     pub k1: usize,
     pub weights: [f64; 2],
 }
 
-fn members(n: usize, idx: &[usize]) -> Vec<bool> {
-    let mut m = vec![false; n];
-    for &i in idx {
-        m[i] = true;
-    }
-    m
-}
-
 impl<'c, 'a> ContactSearch<'c, 'a> {
-    /// Stage 2 around the opposition (oc1, oc2).
-    pub fn around(ctx: &'c SearchContext<'a>, oc: (usize, usize), lambda: f64) -> Self {
+    /// Stage 2 around the opposition (oc1, oc2): each contact gets its own neighbourhood
+    /// Φ(target, λ₂) (Eq 5.6 with p_ref = C_o), the h2 fingers' targets spread along the
+    /// opposition's lateral axis `frame_y` at the fingers' spacing.
+    pub fn around(ctx: &'c SearchContext<'a>, oc: (usize, usize), lambda: f64, frame_y: &Vector3<f64>) -> Self {
         let k1 = ctx.grasp.h1_count();
         let k2 = ctx.grasp.h2_fingers.len();
         let spacing = finger_spacing(ctx);
-        let c1 = ctx.index.within(&ctx.points[oc.0], lambda);
-        let c2 = ctx
-            .index
-            .within(&ctx.points[oc.1], lambda + 0.5 * (k2.saturating_sub(1)) as f64 * spacing);
-        let n = ctx.points.len();
-        let mut slot_candidates = vec![c1.clone(); k1];
-        slot_candidates.extend(std::iter::repeat_n(c2.clone(), k2));
-        let mut slot_member = vec![0; k1];
-        slot_member.extend(std::iter::repeat_n(1, k2));
+        let offsets = |k: usize| (0..k).map(move |f| (f as f64 - (k as f64 - 1.0) / 2.0) * spacing);
+        let targets: Vec<Point3<f64>> = offsets(k1)
+            .map(|o| ctx.points[oc.0] + frame_y * o)
+            .chain(offsets(k2).map(|o| ctx.points[oc.1] + frame_y * o))
+            .collect();
+        let slots = targets
+            .iter()
+            .map(|t| SlotSet::around(ctx.points, ctx.index, t, lambda, ctx.options.contact_candidates))
+            .collect();
         Self {
             ctx,
-            slot_candidates,
-            member: vec![members(n, &c1), members(n, &c2)],
-            slot_member,
+            slots,
+            targets,
             k1,
             weights: ctx.options.stage2_weights,
         }
@@ -66,53 +60,42 @@ impl<'c, 'a> ContactSearch<'c, 'a> {
 
     /// The ablation: every slot draws from the whole cloud.
     pub fn whole_cloud(ctx: &'c SearchContext<'a>) -> Self {
-        let k1 = ctx.grasp.h1_count();
         let m = ctx.grasp.contact_count();
-        let all: Vec<usize> = (0..ctx.points.len()).collect();
         Self {
             ctx,
-            slot_candidates: vec![all; m],
-            member: vec![vec![true; ctx.points.len()]],
-            slot_member: vec![0; m],
-            k1,
+            slots: vec![SlotSet::whole(ctx.points.len()); m],
+            targets: Vec::new(),
+            k1: ctx.grasp.h1_count(),
             weights: ctx.options.stage2_weights,
         }
     }
 
     /// |Φ_ĝ|: the product of the slots' candidate counts (ordered, as the text's 120³).
     pub fn solution_space(&self) -> f64 {
-        self.slot_candidates
-            .iter()
-            .map(|c| c.len() as f64)
-            .product()
+        self.slots.iter().map(|c| c.len() as f64).product()
     }
 
-    /// A start near the opposition: h1 slots at oc1's nearest candidates, h2 slots spread along
-    /// the opposition's lateral axis around oc2.
-    pub fn initial_around(&self, oc: (usize, usize), frame_y: &nalgebra::Vector3<f64>) -> Vec<usize> {
-        let ctx = self.ctx;
-        let k2 = self.slot_candidates.len() - self.k1;
-        let spacing = finger_spacing(ctx);
-        let mut used: Vec<usize> = Vec::new();
-        let mut nearest = |slot: usize, target: nalgebra::Point3<f64>| {
-            let best = self.slot_candidates[slot]
+    /// Whether some slot has no candidate (λ₂ too small for the cloud's density).
+    pub fn has_empty_slot(&self) -> bool {
+        self.slots.iter().any(SlotSet::is_empty)
+    }
+
+    /// A start at the candidates nearest each slot's target (distinct points).
+    pub fn initial_at_targets(&self) -> Vec<usize> {
+        let mut config: Vec<usize> = Vec::with_capacity(self.slots.len());
+        for (slot, target) in self.slots.iter().zip(&self.targets) {
+            let pick = slot
+                .points
                 .iter()
                 .copied()
-                .filter(|i| !used.contains(i))
+                .filter(|i| !config.contains(i))
                 .min_by(|&a, &b| {
-                    (ctx.points[a] - target).norm_squared().total_cmp(&(ctx.points[b] - target).norm_squared())
+                    (self.ctx.points[a] - target)
+                        .norm_squared()
+                        .total_cmp(&(self.ctx.points[b] - target).norm_squared())
                 })
-                .unwrap_or(self.slot_candidates[slot][0]);
-            used.push(best);
-            best
-        };
-        let mut config = Vec::with_capacity(self.slot_candidates.len());
-        for s in 0..self.k1 {
-            config.push(nearest(s, ctx.points[oc.0]));
-        }
-        for f in 0..k2 {
-            let off = (f as f64 - (k2 as f64 - 1.0) / 2.0) * spacing;
-            config.push(nearest(self.k1 + f, ctx.points[oc.1] + frame_y * off));
+                .unwrap_or(slot.points[0]);
+            config.push(pick);
         }
         config
     }
@@ -120,7 +103,8 @@ impl<'c, 'a> ContactSearch<'c, 'a> {
     /// A random start with distinct points (the ablation starts without guidance).
     pub fn initial_random(&self, rng: &mut ChaCha8Rng) -> Vec<usize> {
         let mut config: Vec<usize> = Vec::new();
-        for cands in &self.slot_candidates {
+        for slot in &self.slots {
+            let cands = &slot.points;
             let mut p = cands[rng.random_range(0..cands.len())];
             for _ in 0..16 {
                 if !config.contains(&p) {
@@ -153,13 +137,13 @@ impl<'c, 'a> ContactSearch<'c, 'a> {
             return a;
         };
         for &i in h1 {
-            let push = -ctx.normals[i].dot(&closing);
+            let push = -ctx.normals.get(i).dot(&closing);
             a.violated(MIN_PUSH_COS - push, || {
                 "an h1 contact's surface does not face away from the fingers".into()
             });
         }
         for &i in h2 {
-            let push = ctx.normals[i].dot(&closing);
+            let push = ctx.normals.get(i).dot(&closing);
             a.violated(MIN_PUSH_COS - push, || {
                 "an h2 contact's surface does not face away from the thumb side".into()
             });
@@ -229,16 +213,16 @@ fn finger_spacing(ctx: &SearchContext) -> f64 {
 
 impl SearchProblem for ContactSearch<'_, '_> {
     fn slots(&self) -> usize {
-        self.slot_candidates.len()
+        self.slots.len()
     }
     fn candidates(&self, slot: usize) -> &[usize] {
-        &self.slot_candidates[slot]
+        &self.slots[slot].points
     }
     fn is_candidate(&self, slot: usize, p: usize) -> bool {
-        self.member[self.slot_member[slot]][p]
+        self.slots[slot].contains(p)
     }
-    fn neighbours(&self, p: usize) -> &[usize] {
-        &self.ctx.neighbours[p]
+    fn neighbours(&self, slot: usize, p: usize) -> &[usize] {
+        self.slots[slot].neighbours(p, self.ctx.normals)
     }
     fn evaluate(&mut self, c: &[usize], threshold: f64, best: f64) -> Scored {
         let a = self.assess(c);
@@ -335,10 +319,10 @@ fn stage_one(ctx: &SearchContext, rng: &mut ChaCha8Rng, stats: &mut StageStats) 
     let mut result = (Vec::new(), false);
     for attempt in 0..=ctx.options.restarts {
         let mut prob = OppositionSearch::new(ctx, lambda);
-        stats.candidates = prob.candidates.len();
+        stats.candidates = prob.set.len();
         stats.solution_space = prob.solution_space();
         stats.restarts = attempt;
-        if prob.candidates.len() >= 2 {
+        if prob.set.len() >= 2 {
             let init = prob.initial(rng);
             let sched = budget(ctx, prob.solution_space());
             let run = anneal(&mut prob, init, sched, rng);
@@ -434,50 +418,52 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
     let lambda2 = ctx
         .options
         .lambda2
-        .unwrap_or_else(|| ctx.hand.geometry.finger_width.max(0.02));
-    let mut fallback: Option<(Vec<usize>, f64, (usize, usize))> = None;
-    let mut found: Option<(Vec<usize>, (usize, usize))> = None;
+        .unwrap_or_else(|| ctx.hand.geometry.finger_width.max(0.015));
+    let mut fallback: Option<(Vec<usize>, f64, (usize, usize), Vector3<f64>)> = None;
+    let mut found: Option<(Vec<usize>, (usize, usize), Vector3<f64>)> = None;
     'outer: for oc in &oppositions {
         let oc = (oc[0], oc[1]);
-        let probe = OppositionSearch::new(ctx, 0.0);
-        let frame_y = probe
+        let frame_y = OppositionSearch::new(ctx, 0.0)
             .assess(oc.0, oc.1)
             .frame
             .map(|f| f.y)
-            .unwrap_or_else(nalgebra::Vector3::y);
+            .unwrap_or_else(Vector3::y);
         let mut lambda = lambda2;
         for attempt in 0..=ctx.options.restarts {
-            let mut prob = ContactSearch::around(ctx, oc, lambda);
-            s2.candidates = s2.candidates.max(prob.slot_candidates.iter().map(Vec::len).max().unwrap_or(0));
-            s2.solution_space = s2.solution_space.max(prob.solution_space());
+            let mut prob = ContactSearch::around(ctx, oc, lambda, &frame_y);
             s2.restarts += usize::from(attempt > 0);
-            let init = prob.initial_around(oc, &frame_y);
+            lambda *= 1.5;
+            if prob.has_empty_slot() {
+                continue;
+            }
+            s2.candidates = s2.candidates.max(prob.slots.iter().map(SlotSet::len).max().unwrap_or(0));
+            s2.solution_space = s2.solution_space.max(prob.solution_space());
+            let init = prob.initial_at_targets();
             let sched = budget(ctx, prob.solution_space());
             let run = anneal(&mut prob, init, sched, rng);
             add_run(&mut s2, &run);
             if let Some((c, _)) = run.best {
-                found = Some((c, oc));
+                found = Some((c, oc, frame_y));
                 break 'outer;
             }
             if fallback.as_ref().is_none_or(|f| run.best_any.1 > f.1) {
-                fallback = Some((run.best_any.0.clone(), run.best_any.1, oc));
+                fallback = Some((run.best_any.0.clone(), run.best_any.1, oc, frame_y));
             }
-            lambda *= 1.5;
         }
     }
     s2.seconds = t.elapsed().as_secs_f64();
-    let (contacts, oc, feasible) = match found {
+    let (contacts, oc, frame_y, feasible) = match found {
         // A final grasp that meets every constraint is feasible even if stage 1 had to fall back.
-        Some((c, oc)) => (c, oc, true),
+        Some((c, oc, y)) => (c, oc, y, true),
         None => {
-            let (c, _, oc) = fallback?;
-            (c, oc, false)
+            let (c, _, oc, y) = fallback?;
+            (c, oc, y, false)
         }
     };
     let reason = if feasible {
         None
     } else {
-        let prob = ContactSearch::around(ctx, oc, lambda2);
+        let prob = ContactSearch::around(ctx, oc, lambda2, &frame_y);
         stage1_reason.or_else(|| prob.explain(&contacts).map(|r| format!("stage 2: {r}")))
     };
     Some(SearchOutcome {

@@ -10,6 +10,7 @@ pub mod opposition;
 mod planner;
 pub mod quality;
 pub mod search_context;
+pub mod slot_set;
 pub mod type_rule;
 pub mod types;
 

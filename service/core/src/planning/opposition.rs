@@ -10,6 +10,7 @@ use super::annealing::{Scored, SearchProblem};
 use super::search_context::{
     Assessment, MERIT_COLLIDING, MERIT_GEOMETRY, MERIT_UNSTABLE, SearchContext,
 };
+use super::slot_set::SlotSet;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
@@ -19,30 +20,24 @@ pub const MAX_NORMAL_COS: f64 = -0.5;
 /// The stage-1 search problem.
 pub struct OppositionSearch<'c, 'a> {
     pub ctx: &'c SearchContext<'a>,
-    pub candidates: Vec<usize>,
-    member: Vec<bool>,
+    pub set: SlotSet,
     pub weights: [f64; 2],
 }
 
 impl<'c, 'a> OppositionSearch<'c, 'a> {
-    /// Φ(p_att) with radius `lambda` (Eq 5.6).
+    /// Φ(p_att) with radius `lambda` (Eq 5.6), thinned to `opposition_candidates` points.
     pub fn new(ctx: &'c SearchContext<'a>, lambda: f64) -> Self {
-        let candidates = ctx.index.within(&ctx.p_att, lambda);
-        let mut member = vec![false; ctx.points.len()];
-        for &i in &candidates {
-            member[i] = true;
-        }
+        let set = SlotSet::around(ctx.points, ctx.index, &ctx.p_att, lambda, ctx.options.opposition_candidates);
         Self {
             ctx,
-            candidates,
-            member,
+            set,
             weights: ctx.options.stage1_weights,
         }
     }
 
     /// |Φ_ĝ| of stage 1: ordered pairs (oc1 for h1, oc2 for h2).
     pub fn solution_space(&self) -> f64 {
-        (self.candidates.len() as f64).powi(2)
+        (self.set.len() as f64).powi(2)
     }
 
     /// The opposition-specific constraints and the shared assessment.
@@ -53,7 +48,7 @@ impl<'c, 'a> OppositionSearch<'c, 'a> {
             a.violated(1.0, || "the two opposing points coincide".into());
             return a;
         }
-        let (ni, nj) = (ctx.normals[i], ctx.normals[j]);
+        let (ni, nj) = (ctx.normals.get(i), ctx.normals.get(j));
         let cos_n = ni.dot(&nj);
         a.violated(cos_n - MAX_NORMAL_COS, || {
             format!(
@@ -75,23 +70,24 @@ impl<'c, 'a> OppositionSearch<'c, 'a> {
     /// A start for the annealing: among random oc1 candidates, each paired with its most
     /// antipodal partner in a random sample, the best-scoring pair.
     pub fn initial(&mut self, rng: &mut ChaCha8Rng) -> Vec<usize> {
-        let n = self.candidates.len();
+        let cands = self.set.points.clone();
+        let n = cands.len();
         let a_max = self.ctx.hand.geometry.max_aperture;
         let mut best: Option<(f64, Vec<usize>)> = None;
         for _ in 0..32.min(n) {
-            let i = self.candidates[rng.random_range(0..n)];
-            let (pi, ni) = (self.ctx.points[i], self.ctx.normals[i]);
+            let i = cands[rng.random_range(0..n)];
+            let (pi, ni) = (self.ctx.points[i], self.ctx.normals.get(i));
             let mut pick = None;
             let mut pick_score = f64::NEG_INFINITY;
             for _ in 0..48.min(n) {
-                let j = self.candidates[rng.random_range(0..n)];
+                let j = cands[rng.random_range(0..n)];
                 let d = self.ctx.points[j] - pi;
                 let len = d.norm();
                 if j == i || len < 1e-6 || len > a_max {
                     continue;
                 }
                 let d = d / len;
-                let score = -ni.dot(&d) + self.ctx.normals[j].dot(&d);
+                let score = -ni.dot(&d) + self.ctx.normals.get(j).dot(&d);
                 if score > pick_score {
                     pick_score = score;
                     pick = Some(j);
@@ -103,10 +99,7 @@ impl<'c, 'a> OppositionSearch<'c, 'a> {
                 best = Some((s.merit, vec![i, j]));
             }
         }
-        best.map(|b| b.1).unwrap_or_else(|| {
-            let i = self.candidates[0];
-            vec![i, self.candidates[n - 1]]
-        })
+        best.map(|b| b.1).unwrap_or_else(|| vec![cands[0], cands[n - 1]])
     }
 
     /// Why a configuration is infeasible (None when it is feasible).
@@ -134,13 +127,13 @@ impl SearchProblem for OppositionSearch<'_, '_> {
         2
     }
     fn candidates(&self, _: usize) -> &[usize] {
-        &self.candidates
+        &self.set.points
     }
     fn is_candidate(&self, _: usize, p: usize) -> bool {
-        self.member[p]
+        self.set.contains(p)
     }
-    fn neighbours(&self, p: usize) -> &[usize] {
-        &self.ctx.neighbours[p]
+    fn neighbours(&self, _: usize, p: usize) -> &[usize] {
+        self.set.neighbours(p, self.ctx.normals)
     }
     fn evaluate(&mut self, c: &[usize], threshold: f64, best: f64) -> Scored {
         let a = self.assess(c[0], c[1]);

@@ -9,8 +9,8 @@ use super::search_context::SearchContext;
 use super::type_rule;
 use super::types::*;
 use crate::cloud::{
-    CloudIndex, MIN_POINTS, Orientation, Plane, PointCloud, RansacParams, detect_support_plane,
-    knn_lists, normals_from_neighbours,
+    CloudIndex, LazyNormals, MIN_POINTS, Orientation, Plane, PointCloud, RansacParams,
+    detect_support_plane,
 };
 use crate::error::{FieldError, PlanError};
 use crate::grasp_type::{GraspType, HandPart};
@@ -71,6 +71,8 @@ impl PlannerOptions {
         usize_range("patience", self.patience, 1, 10_000_000)?;
         usize_range("restarts", self.restarts, 0, 10)?;
         usize_range("normals_k", self.normals_k, 3, 100)?;
+        usize_range("opposition_candidates", self.opposition_candidates, 8, 100_000)?;
+        usize_range("contact_candidates", self.contact_candidates, 2, 100_000)?;
         usize_range("friction_cone_edges", self.friction_cone_edges, 3, 64)?;
         if let Some(l) = self.lambda1 {
             check_range("lambda1", l, 1e-4, 2.0)?;
@@ -151,12 +153,11 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
 
     let t = Instant::now();
     let index = CloudIndex::new(points);
-    let neighbours = knn_lists(points, &index, options.normals_k);
-    let normals = match (&scene.normals, hints.viewpoint) {
-        (Some(n), _) => n.clone(),
-        (None, Some(v)) => normals_from_neighbours(points, &neighbours, Orientation::TowardViewpoint(v)),
-        (None, None) => normals_from_neighbours(points, &neighbours, Orientation::AwayFromCentroid),
+    let orient = match hints.viewpoint {
+        Some(v) => Orientation::TowardViewpoint(v),
+        None => Orientation::AwayFromCentroid,
     };
+    let normals = LazyNormals::new(points, &index, options.normals_k, orient, scene.normals.clone());
     let t_normals = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
@@ -204,7 +205,7 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         }
         None => type_rule::attention_point_by_rule(&shape, points, &rule_approach),
     };
-    let (p_att, n_att) = (points[att], normals[att]);
+    let (p_att, n_att) = (points[att], normals.get(att));
     let mut type_scores = [0.0; 6];
     type_scores[requested.index()] = 1.0;
     let t_type = t.elapsed().as_secs_f64();
@@ -218,7 +219,6 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         points,
         normals: &normals,
         index: &index,
-        neighbours: &neighbours,
         shape: &shape,
         hand: &hand,
         grasp: &grasp,
@@ -269,7 +269,7 @@ fn assemble(ctx: &SearchContext, out: &SearchOutcome, scene: &Scene, options: &P
         let i = h1[0];
         contacts.push(Contact {
             position: ctx.points[i],
-            normal: ctx.normals[i],
+            normal: ctx.normals.get(i),
             finger: PALM.into(),
             part: HandPart::Palm,
             point_index: scene.original[i],
@@ -325,7 +325,7 @@ fn assemble(ctx: &SearchContext, out: &SearchOutcome, scene: &Scene, options: &P
             h1: ctx.grasp.h1_part,
             h2: ctx.grasp.h2_part,
             points: [ctx.points[oc1], ctx.points[oc2]],
-            normals: [ctx.normals[oc1], ctx.normals[oc2]],
+            normals: [ctx.normals.get(oc1), ctx.normals.get(oc2)],
         },
         contacts,
         hand_pose,

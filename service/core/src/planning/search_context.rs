@@ -7,7 +7,7 @@ use super::hand_pose::{self, HandFrame, finger_frame, palm_frame};
 use super::object_shape::ObjectShape;
 use super::quality::{self, ContactPoint};
 use super::types::{Pose, PlannerOptions};
-use crate::cloud::{CloudIndex, Plane};
+use crate::cloud::{CloudIndex, LazyNormals, Plane};
 use crate::grasp_type::HandPart;
 use crate::hand::{HandDescription, ResolvedGrasp};
 use nalgebra::{Point3, Vector3};
@@ -21,9 +21,9 @@ pub const MERIT_GEOMETRY: f64 = -10.0;
 /// The planner's view of one request.
 pub struct SearchContext<'a> {
     pub points: &'a [Point3<f64>],
-    pub normals: &'a [Vector3<f64>],
+    /// Normals and k-NN lists, computed on first use.
+    pub normals: &'a LazyNormals<'a>,
     pub index: &'a CloudIndex,
-    pub neighbours: &'a [Vec<usize>],
     pub shape: &'a ObjectShape,
     pub hand: &'a HandDescription,
     pub grasp: &'a ResolvedGrasp,
@@ -69,7 +69,7 @@ impl SearchContext<'_> {
     pub fn contact(&self, i: usize) -> ContactPoint {
         ContactPoint {
             position: self.points[i],
-            normal: self.normals[i],
+            normal: self.normals.get(i),
         }
     }
 
@@ -193,7 +193,7 @@ impl SearchContext<'_> {
                     finger: f,
                     point: *p,
                     position: self.points[*p],
-                    normal: self.normals[*p],
+                    normal: self.normals.get(*p),
                 });
             }
         };

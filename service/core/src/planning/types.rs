@@ -43,9 +43,15 @@ pub struct PlannerOptions {
     pub restarts: usize,
     /// Stage-1 neighbourhood radius λ₁ (m); default 0.6·a_max, bounded by the object's extent.
     pub lambda1: Option<f64>,
-    /// Stage-2 neighbourhood radius λ₂ around the thumb-side point (m); default max(2 cm,
-    /// finger width). The finger side widens it by the fingers' span.
+    /// Stage-2 neighbourhood radius λ₂ around each contact's target (m); default max(1.5 cm,
+    /// finger width).
     pub lambda2: Option<f64>,
+    /// Stage-1 candidates: Φ(p_att) thinned to at most this many spatially even points, so the
+    /// opposition space has the method's size whatever the cloud's density (the dissertation's
+    /// clouds had 120 points).
+    pub opposition_candidates: usize,
+    /// Stage-2 candidates per contact: Φ(target, λ₂) thinned likewise.
+    pub contact_candidates: usize,
     /// k of the k-NN PCA normals.
     pub normals_k: usize,
     /// Back-off of the pre-grasp pose along the approach, m.
@@ -78,6 +84,8 @@ impl Default for PlannerOptions {
             restarts: 2,
             lambda1: None,
             lambda2: None,
+            opposition_candidates: 96,
+            contact_candidates: 16,
             normals_k: 16,
             pregrasp_distance: 0.08,
             friction_cone_edges: 8,
