@@ -1,1 +1,51 @@
-fn main() {}
+//! The `graspd` binary: configuration, logs, runtime, signals.
+
+use clap::Parser;
+use graspd::config::{Cli, Settings};
+use graspd::{server, telemetry};
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let settings = match Settings::resolve(&cli) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("graspd: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    if cli.print_config {
+        match toml::to_string(&settings) {
+            Ok(text) => {
+                print!("{text}");
+                return ExitCode::SUCCESS;
+            }
+            Err(e) => {
+                eprintln!("graspd: {e}");
+                return ExitCode::FAILURE;
+            }
+        }
+    }
+    if let Err(e) = telemetry::init(&settings.log, settings.log_format) {
+        eprintln!("graspd: {e}");
+        return ExitCode::from(2);
+    }
+    let runtime = match tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+    {
+        Ok(rt) => rt,
+        Err(e) => {
+            eprintln!("graspd: cannot start the async runtime: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    match runtime.block_on(server::run(&settings, server::shutdown_signal())) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            tracing::error!(error = %e, "graspd failed");
+            eprintln!("graspd: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

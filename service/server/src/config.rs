@@ -1,0 +1,238 @@
+//! Configuration: flags > environment > TOML file (`--config`) > built-in defaults.
+//!
+//! clap resolves flag over environment; whatever neither gives falls back to the file and then
+//! to the defaults, so every flag is an `Option` here.
+
+use crate::facade::Limits;
+use clap::{Parser, ValueEnum};
+use graspd_core::cloud::MIN_POINTS;
+use serde::{Deserialize, Serialize};
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use thiserror::Error;
+
+#[derive(Debug, Clone, Parser)]
+#[command(
+    name = "graspd",
+    version,
+    about = "graspd: grasp planning with pregrasping opposition, over gRPC and REST"
+)]
+pub struct Cli {
+    /// TOML configuration file; flags and environment variables override its values.
+    #[arg(long, env = "GRASPD_CONFIG", value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// gRPC listen address [default: 0.0.0.0:50051].
+    #[arg(long, env = "GRASPD_GRPC_ADDR", value_name = "ADDR")]
+    pub grpc_addr: Option<SocketAddr>,
+    /// REST listen address [default: 0.0.0.0:8080].
+    #[arg(long, env = "GRASPD_REST_ADDR", value_name = "ADDR")]
+    pub rest_addr: Option<SocketAddr>,
+    /// Largest gRPC message / REST body, bytes; accepts KiB/MiB/GiB suffixes [default: 32MiB].
+    #[arg(long, env = "GRASPD_MAX_MESSAGE_BYTES", value_name = "BYTES", value_parser = parse_bytes)]
+    pub max_message_bytes: Option<usize>,
+    /// Largest cloud, points [default: 500000].
+    #[arg(long, env = "GRASPD_MAX_POINTS", value_name = "N")]
+    pub max_points: Option<usize>,
+    /// Plans computed at once; further requests wait [default: number of CPUs].
+    #[arg(long, env = "GRASPD_MAX_CONCURRENT_PLANS", value_name = "N")]
+    pub max_concurrent_plans: Option<usize>,
+    /// Log filter in tracing's EnvFilter syntax, e.g. `info` or `graspd=debug` [default: info].
+    #[arg(long, env = "GRASPD_LOG", value_name = "FILTER")]
+    pub log: Option<String>,
+    /// Log format [default: pretty].
+    #[arg(long, env = "GRASPD_LOG_FORMAT", value_enum, value_name = "FORMAT")]
+    pub log_format: Option<LogFormat>,
+    /// Print the effective configuration as TOML and exit.
+    #[arg(long)]
+    pub print_config: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LogFormat {
+    /// Human-readable lines.
+    #[default]
+    Pretty,
+    /// One JSON object per line.
+    Json,
+}
+
+/// The config file: the same settings as the flags, all optional.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FileConfig {
+    pub grpc_addr: Option<SocketAddr>,
+    pub rest_addr: Option<SocketAddr>,
+    pub max_message_bytes: Option<usize>,
+    pub max_points: Option<usize>,
+    pub max_concurrent_plans: Option<usize>,
+    pub log: Option<String>,
+    pub log_format: Option<LogFormat>,
+}
+
+/// The effective configuration.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Settings {
+    pub grpc_addr: SocketAddr,
+    pub rest_addr: SocketAddr,
+    pub max_message_bytes: usize,
+    pub max_points: usize,
+    pub max_concurrent_plans: usize,
+    pub log: String,
+    pub log_format: LogFormat,
+}
+
+#[derive(Debug, Error)]
+pub enum ConfigError {
+    #[error("cannot read config file {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("config file {path}: {message}")]
+    Parse { path: PathBuf, message: String },
+    #[error("{field}: {message}")]
+    Invalid {
+        field: &'static str,
+        message: String,
+    },
+}
+
+impl Settings {
+    /// Resolves flag > environment (both in `cli`) > file > default, and checks the values.
+    pub fn resolve(cli: &Cli) -> Result<Self, ConfigError> {
+        let file = match &cli.config {
+            Some(path) => {
+                let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+                    path: path.clone(),
+                    source,
+                })?;
+                toml::from_str::<FileConfig>(&text).map_err(|e| ConfigError::Parse {
+                    path: path.clone(),
+                    message: e.to_string(),
+                })?
+            }
+            None => FileConfig::default(),
+        };
+        let d = Limits::default();
+        let settings = Settings {
+            grpc_addr: cli
+                .grpc_addr
+                .or(file.grpc_addr)
+                .unwrap_or(([0, 0, 0, 0], 50051).into()),
+            rest_addr: cli
+                .rest_addr
+                .or(file.rest_addr)
+                .unwrap_or(([0, 0, 0, 0], 8080).into()),
+            max_message_bytes: cli
+                .max_message_bytes
+                .or(file.max_message_bytes)
+                .unwrap_or(d.max_message_bytes),
+            max_points: cli.max_points.or(file.max_points).unwrap_or(d.max_points),
+            max_concurrent_plans: cli
+                .max_concurrent_plans
+                .or(file.max_concurrent_plans)
+                .unwrap_or(d.max_concurrent_plans),
+            log: cli
+                .log
+                .clone()
+                .or(file.log)
+                .unwrap_or_else(|| "info".into()),
+            log_format: cli.log_format.or(file.log_format).unwrap_or_default(),
+        };
+        settings.check()?;
+        Ok(settings)
+    }
+
+    fn check(&self) -> Result<(), ConfigError> {
+        if self.max_message_bytes < 1024 {
+            return Err(ConfigError::Invalid {
+                field: "max_message_bytes",
+                message: format!("must be at least 1024, got {}", self.max_message_bytes),
+            });
+        }
+        if self.max_points < MIN_POINTS {
+            return Err(ConfigError::Invalid {
+                field: "max_points",
+                message: format!("must be at least {MIN_POINTS}, got {}", self.max_points),
+            });
+        }
+        if self.max_concurrent_plans == 0 {
+            return Err(ConfigError::Invalid {
+                field: "max_concurrent_plans",
+                message: "must be at least 1".into(),
+            });
+        }
+        Ok(())
+    }
+
+    pub fn limits(&self) -> Limits {
+        Limits {
+            max_message_bytes: self.max_message_bytes,
+            max_points: self.max_points,
+            max_concurrent_plans: self.max_concurrent_plans,
+        }
+    }
+}
+
+/// Parses a byte count: `1048576`, `512KiB`, `32MiB`, `1GiB` (also `K`, `M`, `G`, binary).
+pub fn parse_bytes(s: &str) -> Result<usize, String> {
+    let s = s.trim();
+    let split = s.find(|c: char| !c.is_ascii_digit()).unwrap_or(s.len());
+    let (digits, unit) = s.split_at(split);
+    let n: usize = digits
+        .parse()
+        .map_err(|_| format!("'{s}' is not a byte count (e.g. 1048576 or 32MiB)"))?;
+    let scale: usize = match unit.trim() {
+        "" | "B" => 1,
+        "K" | "KiB" | "k" => 1 << 10,
+        "M" | "MiB" => 1 << 20,
+        "G" | "GiB" => 1 << 30,
+        other => return Err(format!("unknown unit '{other}' (use KiB, MiB or GiB)")),
+    };
+    n.checked_mul(scale)
+        .ok_or_else(|| format!("'{s}' is too large"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cli(args: &[&str]) -> Cli {
+        Cli::try_parse_from(std::iter::once("graspd").chain(args.iter().copied())).unwrap()
+    }
+
+    #[test]
+    fn flag_beats_file_beats_default() {
+        let dir = std::env::temp_dir().join(format!("graspd-config-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("graspd.toml");
+        std::fs::write(
+            &path,
+            "max_points = 1000\nrest_addr = \"127.0.0.1:9000\"\nlog_format = \"json\"\n",
+        )
+        .unwrap();
+        let p = path.to_str().unwrap();
+        let s = Settings::resolve(&cli(&["--config", p, "--max-points", "2000"])).unwrap();
+        assert_eq!(s.max_points, 2000);
+        assert_eq!(s.rest_addr, "127.0.0.1:9000".parse().unwrap());
+        assert_eq!(s.log_format, LogFormat::Json);
+        assert_eq!(s.grpc_addr, "0.0.0.0:50051".parse().unwrap());
+        assert_eq!(s.max_message_bytes, 32 << 20);
+        std::fs::write(&path, "bogus = 1\n").unwrap();
+        assert!(matches!(
+            Settings::resolve(&cli(&["--config", p])),
+            Err(ConfigError::Parse { .. })
+        ));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn byte_counts() {
+        assert_eq!(parse_bytes("4096"), Ok(4096));
+        assert_eq!(parse_bytes("32MiB"), Ok(32 << 20));
+        assert_eq!(parse_bytes("2K"), Ok(2048));
+        assert!(parse_bytes("12 parsecs").is_err());
+        assert!(Settings::resolve(&cli(&["--max-message-bytes", "10"])).is_err());
+    }
+}

@@ -1,0 +1,797 @@
+//! The one place that converts between `graspd.v1` proto messages and domain types, both ways
+//! (the server decodes requests and encodes plans; clients do the reverse). Decoding treats the
+//! message as untrusted: every error names the offending field by its proto path.
+
+use crate::facade::{HandChoice, ImageHints, Limits, PlanRequest, PlanSource, ServiceError};
+use graspd_core::cloud::{
+    Plane, PointCloud, decode_packed_vec3, decode_packed_xyz, encode_packed_xyz,
+};
+use graspd_core::hand::{Finger, GraspRealisation, HandGeometry, TypeEquivalence};
+use graspd_core::planning::{
+    CollisionReport, Contact, Opposition, PlaneSource, PlannerMode, Pose, Quality, StageStats,
+    Timings, TypeSource,
+};
+use graspd_core::{
+    FieldError, GraspPlan, GraspType, HandDescription, HandPart, PlanHints, PlannerOptions,
+};
+use graspd_proto::v1 as pb;
+use graspd_proto::v1::plan_grasp_request::{Hand, Input};
+use nalgebra::{Point3, Quaternion, UnitQuaternion, Vector3};
+
+// ---------------------------------------------------------------------------------------------
+// Value types
+
+pub fn vec3_to_proto(v: &Vector3<f64>) -> pb::Vec3 {
+    pb::Vec3 {
+        x: v.x,
+        y: v.y,
+        z: v.z,
+    }
+}
+
+pub fn point_to_proto(p: &Point3<f64>) -> pb::Vec3 {
+    vec3_to_proto(&p.coords)
+}
+
+pub fn vec3_from_proto(v: &pb::Vec3) -> Vector3<f64> {
+    Vector3::new(v.x, v.y, v.z)
+}
+
+fn point_from_proto(v: &pb::Vec3) -> Point3<f64> {
+    Point3::new(v.x, v.y, v.z)
+}
+
+fn required<'a, T>(v: &'a Option<T>, field: &str) -> Result<&'a T, FieldError> {
+    v.as_ref()
+        .ok_or_else(|| FieldError::new(field, "is required"))
+}
+
+pub fn pose_to_proto(p: &Pose) -> pb::Pose {
+    let q = p.orientation;
+    pb::Pose {
+        position: Some(point_to_proto(&p.position)),
+        orientation: Some(pb::Quaternion {
+            x: q.i,
+            y: q.j,
+            z: q.k,
+            w: q.w,
+        }),
+    }
+}
+
+/// Reads a pose as sent by the server (the quaternion is taken as unit, unchanged).
+pub fn pose_from_proto(p: &Option<pb::Pose>, field: &str) -> Result<Pose, FieldError> {
+    let p = required(p, field)?;
+    let position = point_from_proto(required(&p.position, &format!("{field}.position"))?);
+    let q = required(&p.orientation, &format!("{field}.orientation"))?;
+    Ok(Pose {
+        position,
+        orientation: UnitQuaternion::new_unchecked(Quaternion::new(q.w, q.x, q.y, q.z)),
+    })
+}
+
+fn plane_to_proto(p: &Plane) -> pb::Plane {
+    pb::Plane {
+        normal: Some(vec3_to_proto(&p.normal)),
+        offset: p.offset,
+    }
+}
+
+fn plane_from_proto(p: &pb::Plane, field: &str) -> Result<Plane, FieldError> {
+    let normal = required(&p.normal, &format!("{field}.normal"))?;
+    Ok(Plane {
+        normal: vec3_from_proto(normal),
+        offset: p.offset,
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Enums
+
+pub fn grasp_type_to_proto(t: GraspType) -> pb::GraspType {
+    match t {
+        GraspType::LargeWrap => pb::GraspType::LargeWrap,
+        GraspType::SmallWrap => pb::GraspType::SmallWrap,
+        GraspType::Power => pb::GraspType::Power,
+        GraspType::Pinch => pb::GraspType::Pinch,
+        GraspType::Precision => pb::GraspType::Precision,
+        GraspType::Tripod => pb::GraspType::Tripod,
+    }
+}
+
+/// `None` for GRASP_TYPE_UNSPECIFIED; an error for a value outside the enum.
+pub fn grasp_type_from_proto(v: i32, field: &str) -> Result<Option<GraspType>, FieldError> {
+    let t = pb::GraspType::try_from(v)
+        .map_err(|_| FieldError::new(field, format!("unknown grasp type value {v}")))?;
+    Ok(match t {
+        pb::GraspType::Unspecified => None,
+        pb::GraspType::LargeWrap => Some(GraspType::LargeWrap),
+        pb::GraspType::SmallWrap => Some(GraspType::SmallWrap),
+        pb::GraspType::Power => Some(GraspType::Power),
+        pb::GraspType::Pinch => Some(GraspType::Pinch),
+        pb::GraspType::Precision => Some(GraspType::Precision),
+        pb::GraspType::Tripod => Some(GraspType::Tripod),
+    })
+}
+
+fn required_grasp_type(v: i32, field: &str) -> Result<GraspType, FieldError> {
+    grasp_type_from_proto(v, field)?.ok_or_else(|| FieldError::new(field, "must be set"))
+}
+
+pub fn hand_part_to_proto(p: HandPart) -> pb::HandPart {
+    match p {
+        HandPart::ThumbTip => pb::HandPart::Tt,
+        HandPart::ThumbSurface => pb::HandPart::Ts,
+        HandPart::FingerTip => pb::HandPart::Ft,
+        HandPart::FingerSurface => pb::HandPart::Fs,
+        HandPart::Palm => pb::HandPart::P,
+    }
+}
+
+pub fn hand_part_from_proto(v: i32, field: &str) -> Result<HandPart, FieldError> {
+    match pb::HandPart::try_from(v) {
+        Ok(pb::HandPart::Tt) => Ok(HandPart::ThumbTip),
+        Ok(pb::HandPart::Ts) => Ok(HandPart::ThumbSurface),
+        Ok(pb::HandPart::Ft) => Ok(HandPart::FingerTip),
+        Ok(pb::HandPart::Fs) => Ok(HandPart::FingerSurface),
+        Ok(pb::HandPart::P) => Ok(HandPart::Palm),
+        Ok(pb::HandPart::Unspecified) => Err(FieldError::new(field, "must be set")),
+        Err(_) => Err(FieldError::new(
+            field,
+            format!("unknown hand part value {v}"),
+        )),
+    }
+}
+
+fn mode_to_proto(m: PlannerMode) -> pb::PlannerMode {
+    match m {
+        PlannerMode::DualStage => pb::PlannerMode::DualStage,
+        PlannerMode::WithoutOpposition => pb::PlannerMode::WithoutOpposition,
+    }
+}
+
+fn mode_from_proto(v: i32, field: &str) -> Result<PlannerMode, FieldError> {
+    match pb::PlannerMode::try_from(v) {
+        Ok(pb::PlannerMode::DualStage) => Ok(PlannerMode::DualStage),
+        Ok(pb::PlannerMode::WithoutOpposition) => Ok(PlannerMode::WithoutOpposition),
+        Err(_) => Err(FieldError::new(
+            field,
+            format!("unknown planner mode value {v}"),
+        )),
+    }
+}
+
+/// The API names of the type and plane sources ("request", "geometric_rule", …).
+pub fn type_source_name(s: TypeSource) -> &'static str {
+    match s {
+        TypeSource::Request => "request",
+        TypeSource::GeometricRule => "geometric_rule",
+        TypeSource::Model => "model",
+    }
+}
+
+fn type_source_from_name(s: &str) -> Result<TypeSource, FieldError> {
+    match s {
+        "request" => Ok(TypeSource::Request),
+        "geometric_rule" => Ok(TypeSource::GeometricRule),
+        "model" => Ok(TypeSource::Model),
+        _ => Err(FieldError::new(
+            "type_source",
+            format!("unknown source '{s}'"),
+        )),
+    }
+}
+
+pub fn plane_source_name(s: PlaneSource) -> &'static str {
+    match s {
+        PlaneSource::Request => "request",
+        PlaneSource::Detected => "detected",
+        PlaneSource::None => "none",
+    }
+}
+
+fn plane_source_from_name(s: &str) -> Result<PlaneSource, FieldError> {
+    match s {
+        "request" => Ok(PlaneSource::Request),
+        "detected" => Ok(PlaneSource::Detected),
+        "none" => Ok(PlaneSource::None),
+        _ => Err(FieldError::new(
+            "plane_source",
+            format!("unknown source '{s}'"),
+        )),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hands
+
+pub fn hand_to_proto(h: &HandDescription) -> pb::HandDescription {
+    let g = &h.geometry;
+    pb::HandDescription {
+        name: h.name.clone(),
+        description: h.description.clone(),
+        geometry: Some(pb::HandGeometry {
+            palm_width: g.palm_width,
+            palm_length: g.palm_length,
+            palm_thickness: g.palm_thickness,
+            max_aperture: g.max_aperture,
+            min_aperture: g.min_aperture,
+            max_height: g.max_height,
+            finger_width: g.finger_width,
+            max_polygon_area: g.max_polygon_area,
+            max_finger_spread: g.max_finger_spread,
+        }),
+        fingers: h
+            .fingers
+            .iter()
+            .map(|f| pb::Finger {
+                name: f.name.clone(),
+                thumb: f.thumb,
+                parts: f
+                    .parts
+                    .iter()
+                    .map(|p| hand_part_to_proto(*p) as i32)
+                    .collect(),
+                length: f.length,
+                base: Some(pb::Vec3 {
+                    x: f.base[0],
+                    y: f.base[1],
+                    z: f.base[2],
+                }),
+            })
+            .collect(),
+        grasp_types: h
+            .grasp_types
+            .iter()
+            .map(|r| pb::GraspRealisation {
+                r#type: grasp_type_to_proto(r.grasp_type) as i32,
+                h1: r.h1.clone(),
+                h2: r.h2.clone(),
+            })
+            .collect(),
+        equivalent_types: h
+            .equivalent_types
+            .iter()
+            .map(|e| pb::TypeEquivalence {
+                r#type: grasp_type_to_proto(e.grasp_type) as i32,
+                same_as: grasp_type_to_proto(e.same_as) as i32,
+            })
+            .collect(),
+    }
+}
+
+/// Decodes a hand; `field` prefixes the error paths (e.g. `hand_description`). The facade
+/// validates the values.
+pub fn hand_from_proto(h: pb::HandDescription, field: &str) -> Result<HandDescription, FieldError> {
+    let g = required(&h.geometry, &format!("{field}.geometry"))?;
+    let mut fingers = Vec::with_capacity(h.fingers.len());
+    for (i, f) in h.fingers.into_iter().enumerate() {
+        let at = format!("{field}.fingers[{i}]");
+        let base = required(&f.base, &format!("{at}.base"))?;
+        let parts = f
+            .parts
+            .iter()
+            .map(|p| hand_part_from_proto(*p, &format!("{at}.parts")))
+            .collect::<Result<_, _>>()?;
+        fingers.push(Finger {
+            name: f.name,
+            thumb: f.thumb,
+            parts,
+            length: f.length,
+            base: [base.x, base.y, base.z],
+        });
+    }
+    let mut grasp_types = Vec::with_capacity(h.grasp_types.len());
+    for (i, r) in h.grasp_types.into_iter().enumerate() {
+        grasp_types.push(GraspRealisation {
+            grasp_type: required_grasp_type(r.r#type, &format!("{field}.grasp_types[{i}].type"))?,
+            h1: r.h1,
+            h2: r.h2,
+        });
+    }
+    let mut equivalent_types = Vec::with_capacity(h.equivalent_types.len());
+    for (i, e) in h.equivalent_types.into_iter().enumerate() {
+        let at = format!("{field}.equivalent_types[{i}]");
+        equivalent_types.push(TypeEquivalence {
+            grasp_type: required_grasp_type(e.r#type, &format!("{at}.type"))?,
+            same_as: required_grasp_type(e.same_as, &format!("{at}.same_as"))?,
+        });
+    }
+    Ok(HandDescription {
+        name: h.name,
+        description: h.description,
+        geometry: HandGeometry {
+            palm_width: g.palm_width,
+            palm_length: g.palm_length,
+            palm_thickness: g.palm_thickness,
+            max_aperture: g.max_aperture,
+            min_aperture: g.min_aperture,
+            max_height: g.max_height,
+            finger_width: g.finger_width,
+            max_polygon_area: g.max_polygon_area,
+            max_finger_spread: g.max_finger_spread,
+        },
+        fingers,
+        grasp_types,
+        equivalent_types,
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// PlanGrasp request
+
+fn count(v: Option<u32>, default: usize) -> usize {
+    v.map_or(default, |v| v as usize)
+}
+
+fn weights(w: &Option<pb::ObjectiveWeights>, default: [f64; 2]) -> [f64; 2] {
+    w.as_ref()
+        .map_or(default, |w| [w.reachability, w.attention])
+}
+
+/// Unset fields take the planner's defaults.
+pub fn options_from_proto(o: Option<pb::PlannerOptions>) -> Result<PlannerOptions, FieldError> {
+    let d = PlannerOptions::default();
+    let Some(o) = o else { return Ok(d) };
+    Ok(PlannerOptions {
+        seed: o.seed.unwrap_or(d.seed),
+        mode: match o.mode {
+            Some(m) => mode_from_proto(m, "options.mode")?,
+            None => d.mode,
+        },
+        epsilon: o.epsilon.unwrap_or(d.epsilon),
+        friction: o.friction.unwrap_or(d.friction),
+        torsion_gamma: o.torsion_gamma.unwrap_or(d.torsion_gamma),
+        stage1_weights: weights(&o.stage1_weights, d.stage1_weights),
+        stage2_weights: weights(&o.stage2_weights, d.stage2_weights),
+        iteration_fraction: o.iteration_fraction.unwrap_or(d.iteration_fraction),
+        min_iterations: count(o.min_iterations, d.min_iterations),
+        max_iterations: count(o.max_iterations, d.max_iterations),
+        patience: count(o.patience, d.patience),
+        restarts: count(o.restarts, d.restarts),
+        lambda1: o.lambda1.or(d.lambda1),
+        lambda2: o.lambda2.or(d.lambda2),
+        opposition_candidates: count(o.opposition_candidates, d.opposition_candidates),
+        contact_candidates: count(o.contact_candidates, d.contact_candidates),
+        normals_k: count(o.normals_k, d.normals_k),
+        pregrasp_distance: o.pregrasp_distance.unwrap_or(d.pregrasp_distance),
+        friction_cone_edges: count(o.friction_cone_edges, d.friction_cone_edges),
+        check_collisions: o.check_collisions.unwrap_or(d.check_collisions),
+        detect_support_plane: o.detect_support_plane.unwrap_or(d.detect_support_plane),
+        max_center_offset: o.max_center_offset.unwrap_or(d.max_center_offset),
+    })
+}
+
+fn saturate(v: usize) -> u32 {
+    u32::try_from(v).unwrap_or(u32::MAX)
+}
+
+/// Sets only the fields that differ from the defaults, so the server's defaults apply to the rest.
+pub fn options_to_proto(o: &PlannerOptions) -> pb::PlannerOptions {
+    let d = PlannerOptions::default();
+    fn diff<T: PartialEq + Copy>(v: T, d: T) -> Option<T> {
+        (v != d).then_some(v)
+    }
+    let w = |v: [f64; 2], d: [f64; 2]| {
+        (v != d).then_some(pb::ObjectiveWeights {
+            reachability: v[0],
+            attention: v[1],
+        })
+    };
+    pb::PlannerOptions {
+        seed: Some(o.seed),
+        mode: diff(o.mode, d.mode).map(|m| mode_to_proto(m) as i32),
+        epsilon: diff(o.epsilon, d.epsilon),
+        friction: diff(o.friction, d.friction),
+        torsion_gamma: diff(o.torsion_gamma, d.torsion_gamma),
+        stage1_weights: w(o.stage1_weights, d.stage1_weights),
+        stage2_weights: w(o.stage2_weights, d.stage2_weights),
+        iteration_fraction: diff(o.iteration_fraction, d.iteration_fraction),
+        min_iterations: diff(o.min_iterations, d.min_iterations).map(saturate),
+        max_iterations: diff(o.max_iterations, d.max_iterations).map(saturate),
+        patience: diff(o.patience, d.patience).map(saturate),
+        restarts: diff(o.restarts, d.restarts).map(saturate),
+        lambda1: o.lambda1,
+        lambda2: o.lambda2,
+        opposition_candidates: diff(o.opposition_candidates, d.opposition_candidates).map(saturate),
+        contact_candidates: diff(o.contact_candidates, d.contact_candidates).map(saturate),
+        normals_k: diff(o.normals_k, d.normals_k).map(saturate),
+        pregrasp_distance: diff(o.pregrasp_distance, d.pregrasp_distance),
+        friction_cone_edges: diff(o.friction_cone_edges, d.friction_cone_edges).map(saturate),
+        check_collisions: diff(o.check_collisions, d.check_collisions),
+        detect_support_plane: diff(o.detect_support_plane, d.detect_support_plane),
+        max_center_offset: diff(o.max_center_offset, d.max_center_offset),
+    }
+}
+
+fn hints_from_proto(h: Option<pb::PlanHints>) -> Result<(PlanHints, ImageHints), FieldError> {
+    let Some(h) = h else {
+        return Ok(Default::default());
+    };
+    let hints = PlanHints {
+        grasp_type: grasp_type_from_proto(h.grasp_type, "hints.grasp_type")?,
+        attention_point: h.attention_point.as_ref().map(point_from_proto),
+        support_plane: h
+            .support_plane
+            .as_ref()
+            .map(|p| plane_from_proto(p, "hints.support_plane"))
+            .transpose()?,
+        viewpoint: h.viewpoint.as_ref().map(point_from_proto),
+        up: h.up.as_ref().map(vec3_from_proto),
+    };
+    let image = ImageHints {
+        attention_pixel: h.attention_pixel.is_some(),
+        region: h.region.is_some(),
+        most_salient: h.most_salient,
+    };
+    Ok((hints, image))
+}
+
+fn hints_to_proto(h: &PlanHints) -> pb::PlanHints {
+    pb::PlanHints {
+        grasp_type: h
+            .grasp_type
+            .map_or(pb::GraspType::Unspecified, grasp_type_to_proto) as i32,
+        attention_point: h.attention_point.as_ref().map(point_to_proto),
+        support_plane: h.support_plane.as_ref().map(plane_to_proto),
+        viewpoint: h.viewpoint.as_ref().map(point_to_proto),
+        up: h.up.as_ref().map(vec3_to_proto),
+        ..Default::default()
+    }
+}
+
+/// Decodes the packed cloud, refusing more points than the limit before allocating them.
+fn cloud_from_proto(c: pb::PointCloud, limits: &Limits) -> Result<PointCloud, ServiceError> {
+    let n = c.points.len() / 12;
+    if n > limits.max_points {
+        return Err(ServiceError::TooLarge(FieldError::new(
+            "cloud.points",
+            format!(
+                "{n} points exceed the configured limit of {} (max_points)",
+                limits.max_points
+            ),
+        )));
+    }
+    let points = decode_packed_xyz(&c.points, "cloud.points")?;
+    let normals = if c.normals.is_empty() {
+        None
+    } else {
+        Some(decode_packed_vec3(&c.normals, "cloud.normals")?)
+    };
+    Ok(PointCloud { points, normals })
+}
+
+/// Decodes a PlanGrasp request at the edge (the facade validates the values).
+pub fn plan_request_from_proto(
+    r: pb::PlanGraspRequest,
+    limits: &Limits,
+) -> Result<PlanRequest, ServiceError> {
+    let source = match r.input {
+        Some(Input::Cloud(c)) => PlanSource::Cloud(cloud_from_proto(c, limits)?),
+        Some(Input::Rgbd(_)) => PlanSource::Rgbd,
+        None => {
+            return Err(FieldError::new("cloud", "give the input: a cloud (or rgbd)").into());
+        }
+    };
+    let hand = match r.hand {
+        Some(Hand::HandName(name)) => HandChoice::Name(name),
+        Some(Hand::HandDescription(h)) => {
+            HandChoice::Inline(Box::new(hand_from_proto(h, "hand_description")?))
+        }
+        None => {
+            return Err(FieldError::new("hand_name", "give hand_name or hand_description").into());
+        }
+    };
+    let options = options_from_proto(r.options)?;
+    let (hints, image_hints) = hints_from_proto(r.hints)?;
+    Ok(PlanRequest {
+        source,
+        hand,
+        options,
+        hints,
+        image_hints,
+    })
+}
+
+/// Encodes a request for the wire (clients). RGB-D input encodes as an empty frame.
+pub fn plan_request_to_proto(r: &PlanRequest) -> pb::PlanGraspRequest {
+    let input = match &r.source {
+        PlanSource::Cloud(c) => Input::Cloud(pb::PointCloud {
+            points: encode_packed_xyz(&c.points),
+            normals: c
+                .normals
+                .as_ref()
+                .map(|n| {
+                    let as_points: Vec<Point3<f64>> = n.iter().map(|v| Point3::from(*v)).collect();
+                    encode_packed_xyz(&as_points)
+                })
+                .unwrap_or_default(),
+            frame_id: String::new(),
+        }),
+        PlanSource::Rgbd => Input::Rgbd(pb::RgbdFrame::default()),
+    };
+    let hand = match &r.hand {
+        HandChoice::Name(n) => Hand::HandName(n.clone()),
+        HandChoice::Inline(h) => Hand::HandDescription(hand_to_proto(h)),
+    };
+    pb::PlanGraspRequest {
+        input: Some(input),
+        hand: Some(hand),
+        options: Some(options_to_proto(&r.options)),
+        hints: Some(hints_to_proto(&r.hints)),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// PlanGrasp response
+
+fn stage_to_proto(s: &StageStats) -> pb::StageStats {
+    pb::StageStats {
+        solution_space: s.solution_space,
+        candidates: s.candidates as u64,
+        iterations: s.iterations as u64,
+        best_iteration: s.best_iteration as u64,
+        evaluations: s.evaluations as u64,
+        accepted: s.accepted as u64,
+        restarts: s.restarts as u64,
+        feasible_found: s.feasible_found,
+        seconds: s.seconds,
+    }
+}
+
+fn stage_from_proto(s: Option<pb::StageStats>) -> StageStats {
+    let s = s.unwrap_or_default();
+    StageStats {
+        solution_space: s.solution_space,
+        candidates: s.candidates as usize,
+        iterations: s.iterations as usize,
+        best_iteration: s.best_iteration as usize,
+        evaluations: s.evaluations as usize,
+        accepted: s.accepted as usize,
+        restarts: s.restarts as usize,
+        feasible_found: s.feasible_found,
+        seconds: s.seconds,
+    }
+}
+
+pub fn plan_to_proto(p: &GraspPlan) -> pb::PlanGraspResponse {
+    let q = &p.quality;
+    let t = &p.timings;
+    let c = &p.collision;
+    pb::PlanGraspResponse {
+        hand: p.hand.clone(),
+        grasp_type: grasp_type_to_proto(p.grasp_type) as i32,
+        requested_type: grasp_type_to_proto(p.requested_type) as i32,
+        type_source: type_source_name(p.type_source).into(),
+        type_probabilities: p.type_scores.to_vec(),
+        attention: Some(pb::AttentionPoint {
+            position: Some(point_to_proto(&p.attention_point)),
+            normal: Some(vec3_to_proto(&p.attention_normal)),
+            pixel: None,
+        }),
+        opposition: Some(pb::Opposition {
+            h1: hand_part_to_proto(p.opposition.h1) as i32,
+            h2: hand_part_to_proto(p.opposition.h2) as i32,
+            points: p.opposition.points.iter().map(point_to_proto).collect(),
+            normals: p.opposition.normals.iter().map(vec3_to_proto).collect(),
+        }),
+        contacts: p
+            .contacts
+            .iter()
+            .map(|c| pb::Contact {
+                position: Some(point_to_proto(&c.position)),
+                normal: Some(vec3_to_proto(&c.normal)),
+                finger: c.finger.clone(),
+                part: hand_part_to_proto(c.part) as i32,
+                point_index: c.point_index as u64,
+            })
+            .collect(),
+        hand_pose: Some(pose_to_proto(&p.hand_pose)),
+        pregrasp_pose: Some(pose_to_proto(&p.pregrasp_pose)),
+        joints: p
+            .joints
+            .iter()
+            .map(|(name, angle)| pb::JointAngle {
+                name: name.clone(),
+                angle: *angle,
+            })
+            .collect(),
+        quality: Some(pb::Quality {
+            gii: q.gii,
+            reachability: q.reachability,
+            attention: q.attention,
+            objective: q.objective,
+            epsilon: q.epsilon,
+            aperture_or_area: q.aperture_or_area,
+            palm_height: q.palm_height,
+        }),
+        feasible: p.feasible,
+        infeasible_reason: p.infeasible_reason.clone(),
+        stage1: Some(stage_to_proto(&p.stage1)),
+        stage2: Some(stage_to_proto(&p.stage2)),
+        timings: Some(pb::Timings {
+            preprocess: t.preprocess,
+            normals: t.normals,
+            grasp_type: t.grasp_type,
+            stage1: t.stage1,
+            stage2: t.stage2,
+            finalize: t.finalize,
+            total: t.total,
+        }),
+        collision: Some(pb::CollisionReport {
+            checked: c.checked,
+            clear: c.clear,
+            final_points_in_collision: c.final_points_in_collision as u64,
+            pregrasp_points_in_collision: c.pregrasp_points_in_collision as u64,
+            approach_points_in_collision: c.approach_points_in_collision as u64,
+            min_plane_clearance: c.min_plane_clearance,
+        }),
+        support_plane: p.support_plane.as_ref().map(plane_to_proto),
+        plane_source: plane_source_name(p.plane_source).into(),
+        points_used: p.points_used as u64,
+        mode: mode_to_proto(p.mode) as i32,
+        seed: p.seed,
+        warnings: p.warnings.clone(),
+    }
+}
+
+fn pair<T: Copy>(v: Vec<T>, field: &str) -> Result<[T; 2], FieldError> {
+    <[T; 2]>::try_from(v)
+        .map_err(|v| FieldError::new(field, format!("expected 2 values, got {}", v.len())))
+}
+
+/// Decodes a plan as the server sent it (clients).
+pub fn plan_from_proto(p: pb::PlanGraspResponse) -> Result<GraspPlan, FieldError> {
+    let attention = required(&p.attention, "attention")?;
+    let opp = required(&p.opposition, "opposition")?;
+    let q = p.quality.unwrap_or_default();
+    let t = p.timings.unwrap_or_default();
+    let c = p.collision.unwrap_or_default();
+    let type_scores: [f64; 6] =
+        p.type_probabilities
+            .clone()
+            .try_into()
+            .map_err(|v: Vec<f64>| {
+                FieldError::new(
+                    "type_probabilities",
+                    format!("expected 6 values, got {}", v.len()),
+                )
+            })?;
+    let mut contacts = Vec::with_capacity(p.contacts.len());
+    for (i, c) in p.contacts.iter().enumerate() {
+        let at = format!("contacts[{i}]");
+        contacts.push(Contact {
+            position: point_from_proto(required(&c.position, &format!("{at}.position"))?),
+            normal: vec3_from_proto(required(&c.normal, &format!("{at}.normal"))?),
+            finger: c.finger.clone(),
+            part: hand_part_from_proto(c.part, &format!("{at}.part"))?,
+            point_index: c.point_index as usize,
+        });
+    }
+    Ok(GraspPlan {
+        hand: p.hand,
+        grasp_type: required_grasp_type(p.grasp_type, "grasp_type")?,
+        requested_type: required_grasp_type(p.requested_type, "requested_type")?,
+        type_source: type_source_from_name(&p.type_source)?,
+        type_scores,
+        attention_point: point_from_proto(required(&attention.position, "attention.position")?),
+        attention_normal: vec3_from_proto(required(&attention.normal, "attention.normal")?),
+        opposition: Opposition {
+            h1: hand_part_from_proto(opp.h1, "opposition.h1")?,
+            h2: hand_part_from_proto(opp.h2, "opposition.h2")?,
+            points: pair(
+                opp.points.iter().map(point_from_proto).collect(),
+                "opposition.points",
+            )?,
+            normals: pair(
+                opp.normals.iter().map(vec3_from_proto).collect(),
+                "opposition.normals",
+            )?,
+        },
+        contacts,
+        hand_pose: pose_from_proto(&p.hand_pose, "hand_pose")?,
+        pregrasp_pose: pose_from_proto(&p.pregrasp_pose, "pregrasp_pose")?,
+        joints: p.joints.into_iter().map(|j| (j.name, j.angle)).collect(),
+        quality: Quality {
+            gii: q.gii,
+            reachability: q.reachability,
+            attention: q.attention,
+            objective: q.objective,
+            epsilon: q.epsilon,
+            aperture_or_area: q.aperture_or_area,
+            palm_height: q.palm_height,
+        },
+        feasible: p.feasible,
+        infeasible_reason: p.infeasible_reason,
+        stage1: stage_from_proto(p.stage1),
+        stage2: stage_from_proto(p.stage2),
+        timings: Timings {
+            preprocess: t.preprocess,
+            normals: t.normals,
+            grasp_type: t.grasp_type,
+            stage1: t.stage1,
+            stage2: t.stage2,
+            finalize: t.finalize,
+            total: t.total,
+        },
+        collision: CollisionReport {
+            checked: c.checked,
+            clear: c.clear,
+            final_points_in_collision: c.final_points_in_collision as usize,
+            pregrasp_points_in_collision: c.pregrasp_points_in_collision as usize,
+            approach_points_in_collision: c.approach_points_in_collision as usize,
+            min_plane_clearance: c.min_plane_clearance,
+        },
+        support_plane: p
+            .support_plane
+            .as_ref()
+            .map(|s| plane_from_proto(s, "support_plane"))
+            .transpose()?,
+        plane_source: plane_source_from_name(&p.plane_source)?,
+        points_used: p.points_used as usize,
+        mode: mode_from_proto(p.mode, "mode")?,
+        seed: p.seed,
+        warnings: p.warnings,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use graspd_core::HandCatalog;
+
+    #[test]
+    fn hands_round_trip() {
+        for h in HandCatalog::builtin().list() {
+            assert_eq!(&hand_from_proto(hand_to_proto(h), "hand").unwrap(), h);
+        }
+    }
+
+    #[test]
+    fn options_round_trip_and_unset_means_default() {
+        assert_eq!(options_from_proto(None).unwrap(), PlannerOptions::default());
+        let o = PlannerOptions {
+            seed: 7,
+            mode: PlannerMode::WithoutOpposition,
+            epsilon: 0.5,
+            stage2_weights: [0.1, 0.9],
+            lambda1: Some(0.03),
+            check_collisions: false,
+            ..PlannerOptions::default()
+        };
+        assert_eq!(options_from_proto(Some(options_to_proto(&o))).unwrap(), o);
+    }
+
+    #[test]
+    fn bad_cloud_bytes_name_the_field() {
+        let r = pb::PlanGraspRequest {
+            input: Some(Input::Cloud(pb::PointCloud {
+                points: vec![0; 13],
+                ..Default::default()
+            })),
+            hand: Some(Hand::HandName("shadow".into())),
+            ..Default::default()
+        };
+        let e = plan_request_from_proto(r, &Limits::default()).unwrap_err();
+        assert_eq!(e.field(), Some("cloud.points"));
+        assert!(
+            e.to_string()
+                .contains("byte length 13 is not a multiple of 12")
+        );
+    }
+
+    #[test]
+    fn bad_enum_values_name_the_field() {
+        let r = pb::PlanGraspRequest {
+            input: Some(Input::Cloud(pb::PointCloud::default())),
+            hand: Some(Hand::HandName("shadow".into())),
+            hints: Some(pb::PlanHints {
+                grasp_type: 42,
+                ..Default::default()
+            }),
+            ..Default::default()
+        };
+        let e = plan_request_from_proto(r, &Limits::default()).unwrap_err();
+        assert_eq!(e.field(), Some("hints.grasp_type"));
+    }
+}

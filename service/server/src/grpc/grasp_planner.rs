@@ -1,0 +1,72 @@
+//! The `graspd.v1.GraspPlanner` service: decode, call the facade, encode.
+
+use super::convert;
+use super::status::to_status;
+use crate::runner::PlanRunner;
+use graspd_proto::v1 as pb;
+use graspd_proto::v1::grasp_planner_server::GraspPlanner;
+use tonic::{Request, Response, Status};
+
+pub struct GraspPlannerService {
+    runner: PlanRunner,
+}
+
+impl GraspPlannerService {
+    pub fn new(runner: PlanRunner) -> Self {
+        Self { runner }
+    }
+}
+
+#[tonic::async_trait]
+impl GraspPlanner for GraspPlannerService {
+    async fn plan_grasp(
+        &self,
+        request: Request<pb::PlanGraspRequest>,
+    ) -> Result<Response<pb::PlanGraspResponse>, Status> {
+        let limits = *self.runner.service().limits();
+        let request =
+            convert::plan_request_from_proto(request.into_inner(), &limits).map_err(to_status)?;
+        let plan = self.runner.plan(request, "grpc").await.map_err(to_status)?;
+        Ok(Response::new(convert::plan_to_proto(&plan)))
+    }
+
+    async fn list_hands(
+        &self,
+        _request: Request<pb::ListHandsRequest>,
+    ) -> Result<Response<pb::ListHandsResponse>, Status> {
+        let hands = self.runner.service().list_hands();
+        Ok(Response::new(pb::ListHandsResponse {
+            hands: hands.iter().map(convert::hand_to_proto).collect(),
+        }))
+    }
+
+    async fn get_hand(
+        &self,
+        request: Request<pb::GetHandRequest>,
+    ) -> Result<Response<pb::GetHandResponse>, Status> {
+        let name = request.into_inner().name;
+        let hand = self
+            .runner
+            .service()
+            .get_hand(&name, "name")
+            .map_err(to_status)?;
+        Ok(Response::new(pb::GetHandResponse {
+            realisable_types: hand
+                .realisable_types()
+                .into_iter()
+                .map(|t| convert::grasp_type_to_proto(t) as i32)
+                .collect(),
+            hand: Some(convert::hand_to_proto(&hand)),
+        }))
+    }
+
+    async fn register_hand(
+        &self,
+        _request: Request<pb::RegisterHandRequest>,
+    ) -> Result<Response<pb::RegisterHandResponse>, Status> {
+        self.runner.service().register_hand().map_err(to_status)?;
+        Err(Status::unimplemented(
+            "registering hands is not implemented yet",
+        ))
+    }
+}

@@ -1,0 +1,15 @@
+//! graspd: the grasp-planning service. One facade ([`facade::GraspService`]) over the domain
+//! crate `graspd-core`, served by two thin transports: gRPC ([`grpc`], tonic) and REST
+//! ([`rest`], axum).
+
+pub mod config;
+pub mod facade;
+pub mod grpc;
+pub mod rest;
+pub mod runner;
+pub mod server;
+pub mod telemetry;
+
+pub use facade::{
+    GraspService, HandChoice, ImageHints, Limits, PlanRequest, PlanSource, ServiceError,
+};

@@ -1,0 +1,595 @@
+//! The one place that converts between the REST JSON and domain types. The JSON mirrors the proto
+//! in snake_case; where the domain's own serde form is the documented one (hand descriptions,
+//! planner options, grasp-type and hand-part names, the numeric report structs) it is used as
+//! is, and the DTOs here cover what differs: clouds (arrays or base64), positions as
+//! `{x, y, z}` (accepted as `[x, y, z]` too), poses and the response layout.
+
+use crate::facade::{HandChoice, ImageHints, Limits, PlanRequest, PlanSource, ServiceError};
+use base64::Engine;
+use graspd_core::cloud::{Plane, PointCloud, decode_packed_vec3};
+use graspd_core::planning::{
+    CollisionReport, PlaneSource, PlannerMode, Pose, Quality, StageStats, Timings, TypeSource,
+};
+use graspd_core::{
+    FieldError, GraspPlan, GraspType, HandDescription, HandPart, PlanHints, PlannerOptions,
+};
+use nalgebra::{Point3, Vector3};
+use serde::de::{self, DeserializeOwned, IgnoredAny, MapAccess, SeqAccess, Visitor};
+use serde::{Deserialize, Deserializer, Serialize};
+use std::fmt;
+
+// ---------------------------------------------------------------------------------------------
+// Parsing with field paths
+
+/// Parses JSON; errors name the field by its path (`hints.grasp_type`, `options.foo`), or
+/// `root` (e.g. `body`) when the JSON itself is malformed.
+pub fn parse<T: DeserializeOwned>(bytes: &[u8], root: &str) -> Result<T, FieldError> {
+    let de = &mut serde_json::Deserializer::from_slice(bytes);
+    let value = serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let message = e.inner().to_string();
+        let mut field = if path == "." || path == "?" || path.is_empty() {
+            root.to_string()
+        } else {
+            path
+        };
+        // serde reports an unknown field at its parent; name the field itself.
+        if let Some(rest) = message.strip_prefix("unknown field `")
+            && let Some(name) = rest.split('`').next()
+            && !field.ends_with(name)
+        {
+            field = if field == root && root == "body" {
+                name.to_string()
+            } else {
+                format!("{field}.{name}")
+            };
+        }
+        FieldError::new(field, message)
+    })?;
+    Ok(value)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Value types
+
+/// A 3-D point or vector: written as `{x, y, z}`, read from that or from `[x, y, z]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Vec3Json {
+    pub x: f64,
+    pub y: f64,
+    pub z: f64,
+}
+
+impl From<&Point3<f64>> for Vec3Json {
+    fn from(p: &Point3<f64>) -> Self {
+        Self {
+            x: p.x,
+            y: p.y,
+            z: p.z,
+        }
+    }
+}
+
+impl From<&Vector3<f64>> for Vec3Json {
+    fn from(v: &Vector3<f64>) -> Self {
+        Self {
+            x: v.x,
+            y: v.y,
+            z: v.z,
+        }
+    }
+}
+
+impl Vec3Json {
+    pub fn point(&self) -> Point3<f64> {
+        Point3::new(self.x, self.y, self.z)
+    }
+
+    pub fn vector(&self) -> Vector3<f64> {
+        Vector3::new(self.x, self.y, self.z)
+    }
+}
+
+impl<'de> Deserialize<'de> for Vec3Json {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Vec3Json;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("[x, y, z] or {\"x\": .., \"y\": .., \"z\": ..}")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut s: A) -> Result<Vec3Json, A::Error> {
+                let mut v = [0.0; 3];
+                for (i, slot) in v.iter_mut().enumerate() {
+                    *slot = s
+                        .next_element()?
+                        .ok_or_else(|| de::Error::invalid_length(i, &self))?;
+                }
+                if s.next_element::<IgnoredAny>()?.is_some() {
+                    return Err(de::Error::invalid_length(4, &self));
+                }
+                Ok(Vec3Json {
+                    x: v[0],
+                    y: v[1],
+                    z: v[2],
+                })
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<Vec3Json, A::Error> {
+                let mut v = [None; 3];
+                while let Some(key) = m.next_key::<String>()? {
+                    let i = match key.as_str() {
+                        "x" => 0,
+                        "y" => 1,
+                        "z" => 2,
+                        other => return Err(de::Error::unknown_field(other, &["x", "y", "z"])),
+                    };
+                    v[i] = Some(m.next_value()?);
+                }
+                let get =
+                    |i: usize, n: &'static str| v[i].ok_or_else(|| de::Error::missing_field(n));
+                Ok(Vec3Json {
+                    x: get(0, "x")?,
+                    y: get(1, "y")?,
+                    z: get(2, "z")?,
+                })
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A rotation as a unit quaternion (x, y, z, w).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct QuaternionJson {
+    pub x: f64,
+    pub y: f64,
+    pub z: f64,
+    pub w: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PoseJson {
+    pub position: Vec3Json,
+    pub orientation: QuaternionJson,
+}
+
+impl From<&Pose> for PoseJson {
+    fn from(p: &Pose) -> Self {
+        let q = p.orientation;
+        Self {
+            position: (&p.position).into(),
+            orientation: QuaternionJson {
+                x: q.i,
+                y: q.j,
+                z: q.k,
+                w: q.w,
+            },
+        }
+    }
+}
+
+/// The plane n·x + offset = 0.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlaneJson {
+    pub normal: Vec3Json,
+    pub offset: f64,
+}
+
+impl From<&Plane> for PlaneJson {
+    fn from(p: &Plane) -> Self {
+        Self {
+            normal: (&p.normal).into(),
+            offset: p.offset,
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Request
+
+/// Points as `[[x, y, z], …]` or as a base64 string of packed little-endian float32 triples.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Vec3List {
+    Values(Vec<[f64; 3]>),
+    Packed(Vec<u8>),
+}
+
+impl<'de> Deserialize<'de> for Vec3List {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Vec3List;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("an array of [x, y, z] or a base64 string of packed little-endian float32 x, y, z")
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<Vec3List, E> {
+                base64::engine::general_purpose::STANDARD
+                    .decode(s)
+                    .map(Vec3List::Packed)
+                    .map_err(|e| E::custom(format!("invalid base64: {e}")))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut s: A) -> Result<Vec3List, A::Error> {
+                let mut v = Vec::with_capacity(s.size_hint().unwrap_or(0).min(1 << 16));
+                while let Some(p) = s.next_element::<[f64; 3]>()? {
+                    v.push(p);
+                }
+                Ok(Vec3List::Values(v))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CloudJson {
+    pub points: Vec3List,
+    #[serde(default)]
+    pub normals: Option<Vec3List>,
+    /// Echoed by nobody yet; accepted for parity with the proto.
+    #[serde(default)]
+    pub frame_id: String,
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HintsJson {
+    #[serde(default)]
+    pub grasp_type: Option<GraspType>,
+    #[serde(default)]
+    pub attention_point: Option<Vec3Json>,
+    #[serde(default)]
+    pub support_plane: Option<PlaneJson>,
+    #[serde(default)]
+    pub viewpoint: Option<Vec3Json>,
+    #[serde(default)]
+    pub up: Option<Vec3Json>,
+    /// Image hints: not implemented yet (answer 501).
+    #[serde(default)]
+    pub attention_pixel: Option<IgnoredAny>,
+    #[serde(default)]
+    pub region: Option<IgnoredAny>,
+    #[serde(default)]
+    pub most_salient: bool,
+}
+
+/// `POST /v1/plan`: the PlanGraspRequest in JSON. In a multipart upload the `request` part has
+/// the same shape without `cloud`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanRequestJson {
+    #[serde(default)]
+    pub cloud: Option<CloudJson>,
+    /// RGB-D input: not implemented yet (answers 501).
+    #[serde(default)]
+    pub rgbd: Option<IgnoredAny>,
+    #[serde(default)]
+    pub hand_name: Option<String>,
+    #[serde(default)]
+    pub hand_description: Option<Box<HandDescription>>,
+    #[serde(default)]
+    pub options: Option<PlannerOptions>,
+    #[serde(default)]
+    pub hints: Option<HintsJson>,
+}
+
+fn points_from_json(
+    list: Vec3List,
+    field: &str,
+    limits: &Limits,
+) -> Result<Vec<Vector3<f64>>, ServiceError> {
+    let n = match &list {
+        Vec3List::Values(v) => v.len(),
+        Vec3List::Packed(b) => b.len() / 12,
+    };
+    if n > limits.max_points {
+        return Err(ServiceError::TooLarge(FieldError::new(
+            field,
+            format!(
+                "{n} points exceed the configured limit of {} (max_points)",
+                limits.max_points
+            ),
+        )));
+    }
+    Ok(match list {
+        Vec3List::Values(v) => v
+            .into_iter()
+            .map(|p| Vector3::new(p[0], p[1], p[2]))
+            .collect(),
+        Vec3List::Packed(b) => decode_packed_vec3(&b, field)?,
+    })
+}
+
+fn cloud_from_json(c: CloudJson, limits: &Limits) -> Result<PointCloud, ServiceError> {
+    let points = points_from_json(c.points, "cloud.points", limits)?
+        .into_iter()
+        .map(Point3::from)
+        .collect();
+    let normals = c
+        .normals
+        .map(|n| points_from_json(n, "cloud.normals", limits))
+        .transpose()?;
+    Ok(PointCloud { points, normals })
+}
+
+/// Turns the JSON into a domain request. `file_cloud` is the cloud of a multipart upload, which
+/// excludes one in the JSON.
+pub fn plan_request_from_json(
+    r: PlanRequestJson,
+    file_cloud: Option<PointCloud>,
+    limits: &Limits,
+) -> Result<PlanRequest, ServiceError> {
+    let source = match (r.cloud, r.rgbd, file_cloud) {
+        (Some(_), _, Some(_)) => {
+            return Err(FieldError::new(
+                "cloud",
+                "give the cloud either as the file part or in the request JSON, not both",
+            )
+            .into());
+        }
+        (Some(_), Some(_), None) => {
+            return Err(FieldError::new("rgbd", "give either cloud or rgbd, not both").into());
+        }
+        (None, Some(_), _) => PlanSource::Rgbd,
+        (Some(c), None, None) => PlanSource::Cloud(cloud_from_json(c, limits)?),
+        (None, None, Some(c)) => PlanSource::Cloud(c),
+        (None, None, None) => {
+            return Err(FieldError::new(
+                "cloud",
+                "give the input: a cloud (JSON or a multipart file part named cloud)",
+            )
+            .into());
+        }
+    };
+    let hand = match (r.hand_name, r.hand_description) {
+        (Some(_), Some(_)) => {
+            return Err(FieldError::new(
+                "hand_name",
+                "give either hand_name or hand_description, not both",
+            )
+            .into());
+        }
+        (Some(n), None) => HandChoice::Name(n),
+        (None, Some(h)) => HandChoice::Inline(h),
+        (None, None) => {
+            return Err(FieldError::new("hand_name", "give hand_name or hand_description").into());
+        }
+    };
+    let h = r.hints.unwrap_or_default();
+    let hints = PlanHints {
+        grasp_type: h.grasp_type,
+        attention_point: h.attention_point.map(|p| p.point()),
+        support_plane: h.support_plane.map(|p| Plane {
+            normal: p.normal.vector(),
+            offset: p.offset,
+        }),
+        viewpoint: h.viewpoint.map(|p| p.point()),
+        up: h.up.map(|p| p.vector()),
+    };
+    let image_hints = ImageHints {
+        attention_pixel: h.attention_pixel.is_some(),
+        region: h.region.is_some(),
+        most_salient: h.most_salient,
+    };
+    Ok(PlanRequest {
+        source,
+        hand,
+        options: r.options.unwrap_or_default(),
+        hints,
+        image_hints,
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Response
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PixelJson {
+    pub u: u32,
+    pub v: u32,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AttentionJson {
+    pub position: Vec3Json,
+    pub normal: Vec3Json,
+    /// The pixel, when the input was an image.
+    pub pixel: Option<PixelJson>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OppositionJson {
+    pub h1: HandPart,
+    pub h2: HandPart,
+    pub points: [Vec3Json; 2],
+    pub normals: [Vec3Json; 2],
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ContactJson {
+    pub position: Vec3Json,
+    pub normal: Vec3Json,
+    pub finger: String,
+    pub part: HandPart,
+    pub point_index: usize,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JointJson {
+    pub name: String,
+    pub angle: f64,
+}
+
+/// The PlanGraspResponse in JSON.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanResponseJson {
+    pub hand: String,
+    pub grasp_type: GraspType,
+    pub requested_type: GraspType,
+    pub type_source: TypeSource,
+    /// In the order large_wrap, small_wrap, power, pinch, precision, tripod.
+    pub type_probabilities: [f64; 6],
+    pub attention: AttentionJson,
+    pub opposition: OppositionJson,
+    pub contacts: Vec<ContactJson>,
+    pub hand_pose: PoseJson,
+    pub pregrasp_pose: PoseJson,
+    pub joints: Vec<JointJson>,
+    pub quality: Quality,
+    pub feasible: bool,
+    pub infeasible_reason: Option<String>,
+    pub stage1: StageStats,
+    pub stage2: StageStats,
+    pub timings: Timings,
+    pub collision: CollisionReport,
+    pub support_plane: Option<PlaneJson>,
+    pub plane_source: PlaneSource,
+    pub points_used: usize,
+    pub mode: PlannerMode,
+    pub seed: u64,
+    pub warnings: Vec<String>,
+}
+
+impl From<&GraspPlan> for PlanResponseJson {
+    fn from(p: &GraspPlan) -> Self {
+        let o = &p.opposition;
+        Self {
+            hand: p.hand.clone(),
+            grasp_type: p.grasp_type,
+            requested_type: p.requested_type,
+            type_source: p.type_source,
+            type_probabilities: p.type_scores,
+            attention: AttentionJson {
+                position: (&p.attention_point).into(),
+                normal: (&p.attention_normal).into(),
+                pixel: None,
+            },
+            opposition: OppositionJson {
+                h1: o.h1,
+                h2: o.h2,
+                points: [(&o.points[0]).into(), (&o.points[1]).into()],
+                normals: [(&o.normals[0]).into(), (&o.normals[1]).into()],
+            },
+            contacts: p
+                .contacts
+                .iter()
+                .map(|c| ContactJson {
+                    position: (&c.position).into(),
+                    normal: (&c.normal).into(),
+                    finger: c.finger.clone(),
+                    part: c.part,
+                    point_index: c.point_index,
+                })
+                .collect(),
+            hand_pose: (&p.hand_pose).into(),
+            pregrasp_pose: (&p.pregrasp_pose).into(),
+            joints: p
+                .joints
+                .iter()
+                .map(|(name, angle)| JointJson {
+                    name: name.clone(),
+                    angle: *angle,
+                })
+                .collect(),
+            quality: p.quality,
+            feasible: p.feasible,
+            infeasible_reason: p.infeasible_reason.clone(),
+            stage1: p.stage1,
+            stage2: p.stage2,
+            timings: p.timings,
+            collision: p.collision,
+            support_plane: p.support_plane.as_ref().map(PlaneJson::from),
+            plane_source: p.plane_source,
+            points_used: p.points_used,
+            mode: p.mode,
+            seed: p.seed,
+            warnings: p.warnings.clone(),
+        }
+    }
+}
+
+/// `GET /v1/hands`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct HandsJson {
+    pub hands: Vec<HandDescription>,
+}
+
+/// `GET /v1/hands/{name}`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct HandJson {
+    pub hand: HandDescription,
+    pub realisable_types: Vec<GraspType>,
+}
+
+impl From<HandDescription> for HandJson {
+    fn from(hand: HandDescription) -> Self {
+        Self {
+            realisable_types: hand.realisable_types(),
+            hand,
+        }
+    }
+}
+
+/// The error body of every non-2xx answer.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ErrorJson {
+    pub error: ErrorDetailJson,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ErrorDetailJson {
+    /// invalid_argument, not_found, payload_too_large, unimplemented, unsupported_media_type,
+    /// internal.
+    pub code: String,
+    pub field: Option<String>,
+    pub message: String,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn limits() -> Limits {
+        Limits::default()
+    }
+
+    #[test]
+    fn unknown_fields_are_named_with_their_path() {
+        let e =
+            parse::<PlanRequestJson>(br#"{"hand_name":"shadow","bogus":1}"#, "body").unwrap_err();
+        assert_eq!(e.field, "bogus");
+        let e = parse::<PlanRequestJson>(br#"{"options":{"epsilonn":1}}"#, "body").unwrap_err();
+        assert_eq!(e.field, "options.epsilonn");
+        let e =
+            parse::<PlanRequestJson>(br#"{"hints":{"grasp_type":"grab"}}"#, "body").unwrap_err();
+        assert_eq!(e.field, "hints.grasp_type");
+        let e = parse::<PlanRequestJson>(br#"{"cloud":{"points":[[1,2]]}}"#, "body").unwrap_err();
+        assert!(e.field.starts_with("cloud.points"), "{}", e.field);
+        let e = parse::<PlanRequestJson>(b"{not json", "body").unwrap_err();
+        assert_eq!(e.field, "body");
+    }
+
+    #[test]
+    fn clouds_as_arrays_or_base64() {
+        let r: PlanRequestJson = parse(
+            br#"{"cloud":{"points":[[0,0,0],[1,2,3]]},"hand_name":"shadow","hints":{"attention_point":{"x":1,"y":2,"z":3},"viewpoint":[0,0,1]}}"#,
+            "body",
+        )
+        .unwrap();
+        let req = plan_request_from_json(r, None, &limits()).unwrap();
+        let PlanSource::Cloud(c) = &req.source else {
+            panic!()
+        };
+        assert_eq!(c.points[1], Point3::new(1.0, 2.0, 3.0));
+        assert_eq!(req.hints.attention_point, Some(Point3::new(1.0, 2.0, 3.0)));
+
+        let packed = graspd_core::cloud::encode_packed_xyz(&[Point3::new(1.0, 2.0, 3.0)]);
+        let b64 = base64::engine::general_purpose::STANDARD.encode(&packed[..11]);
+        let body = format!(r#"{{"cloud":{{"points":"{b64}"}},"hand_name":"shadow"}}"#);
+        let r: PlanRequestJson = parse(body.as_bytes(), "body").unwrap();
+        let e = plan_request_from_json(r, None, &limits()).unwrap_err();
+        assert_eq!(e.field(), Some("cloud.points"));
+        assert!(e.to_string().contains("byte length 11"));
+    }
+}

@@ -1,0 +1,137 @@
+//! Starts both transports over one facade, announces the bound addresses, and shuts both down
+//! gracefully on a signal.
+
+use crate::config::Settings;
+use crate::facade::GraspService;
+use crate::runner::PlanRunner;
+use crate::{grpc, rest};
+use std::future::Future;
+use std::io::Write;
+use std::net::SocketAddr;
+use std::time::Duration;
+use thiserror::Error;
+use tokio::net::TcpListener;
+use tokio::sync::watch;
+
+/// How long in-flight requests may take to finish after a shutdown signal.
+pub const DRAIN_TIMEOUT: Duration = Duration::from_secs(30);
+
+#[derive(Debug, Error)]
+pub enum ServeError {
+    #[error("cannot listen for {what} on {addr}: {source}")]
+    Bind {
+        what: &'static str,
+        addr: SocketAddr,
+        source: std::io::Error,
+    },
+    #[error("cannot announce the listening addresses: {0}")]
+    Announce(std::io::Error),
+    #[error("gRPC server: {0}")]
+    Grpc(#[from] tonic::transport::Error),
+    #[error("REST server: {0}")]
+    Rest(std::io::Error),
+    #[error("server task failed: {0}")]
+    Task(#[from] tokio::task::JoinError),
+}
+
+async fn bind(what: &'static str, addr: SocketAddr) -> Result<TcpListener, ServeError> {
+    TcpListener::bind(addr)
+        .await
+        .map_err(|source| ServeError::Bind { what, addr, source })
+}
+
+/// Binds both listeners, prints `graspd listening grpc=ADDR rest=ADDR` on stdout (tests read
+/// it to find ephemeral ports), serves until `shutdown` completes, then drains both.
+pub async fn run(
+    settings: &Settings,
+    shutdown: impl Future<Output = ()> + Send,
+) -> Result<(), ServeError> {
+    let grpc_listener = bind("gRPC", settings.grpc_addr).await?;
+    let rest_listener = bind("REST", settings.rest_addr).await?;
+    let grpc_addr = grpc_listener.local_addr().map_err(ServeError::Announce)?;
+    let rest_addr = rest_listener.local_addr().map_err(ServeError::Announce)?;
+
+    let runner = PlanRunner::new(GraspService::builtin(settings.limits()));
+    let (stop, stopped) = watch::channel(());
+    let wait = |mut rx: watch::Receiver<()>| async move {
+        let _ = rx.changed().await;
+    };
+    let mut grpc_task = tokio::spawn(grpc::serve(
+        grpc_listener,
+        runner.clone(),
+        wait(stopped.clone()),
+    ));
+    let mut rest_task = tokio::spawn(rest::serve(rest_listener, runner, wait(stopped)));
+
+    {
+        let mut out = std::io::stdout().lock();
+        writeln!(out, "graspd listening grpc={grpc_addr} rest={rest_addr}")
+            .and_then(|()| out.flush())
+            .map_err(ServeError::Announce)?;
+    }
+    tracing::info!(
+        %grpc_addr,
+        %rest_addr,
+        max_message_bytes = settings.max_message_bytes,
+        max_points = settings.max_points,
+        max_concurrent_plans = settings.max_concurrent_plans,
+        "graspd listening"
+    );
+
+    tokio::select! {
+        () = shutdown => {}
+        r = &mut grpc_task => {
+            r??;
+            tracing::warn!("the gRPC server stopped by itself");
+        }
+        r = &mut rest_task => {
+            r?.map_err(ServeError::Rest)?;
+            tracing::warn!("the REST server stopped by itself");
+        }
+    }
+    tracing::info!("shutting down: draining in-flight requests");
+    let _ = stop.send(());
+    let drained = tokio::time::timeout(DRAIN_TIMEOUT, async {
+        if !grpc_task.is_finished() {
+            (&mut grpc_task).await??;
+        }
+        if !rest_task.is_finished() {
+            (&mut rest_task).await?.map_err(ServeError::Rest)?;
+        }
+        Ok::<(), ServeError>(())
+    })
+    .await;
+    match drained {
+        Ok(result) => result?,
+        Err(_) => tracing::warn!(
+            "requests still open after {}s; stopping anyway",
+            DRAIN_TIMEOUT.as_secs()
+        ),
+    }
+    tracing::info!("stopped");
+    Ok(())
+}
+
+/// Completes on Ctrl-C (SIGINT) or SIGTERM.
+pub async fn shutdown_signal() {
+    let ctrl_c = async {
+        if tokio::signal::ctrl_c().await.is_err() {
+            std::future::pending::<()>().await;
+        }
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        () = ctrl_c => tracing::info!("received Ctrl-C"),
+        () = term => tracing::info!("received SIGTERM"),
+    }
+}
