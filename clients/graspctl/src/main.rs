@@ -1,1 +1,266 @@
-fn main() {}
+//! `graspctl`: plan grasps on PCD/PLY clouds and list hands, over graspd's gRPC API.
+
+mod summary;
+
+use clap::{Args, Parser, Subcommand};
+use graspd::grpc::convert;
+use graspd::rest::json::{HandJson, HandsJson, PlanResponseJson};
+use graspd::{HandChoice, ImageHints, PlanRequest, PlanSource};
+use graspd_core::cloud::Plane;
+use graspd_core::cloud::io::read_cloud_file;
+use graspd_core::hand::parse_hand_toml;
+use graspd_core::planning::PlannerMode;
+use graspd_core::{FieldError, GraspType, PlanHints, PlannerOptions};
+use graspd_proto::v1 as pb;
+use graspd_proto::v1::grasp_planner_client::GraspPlannerClient;
+use nalgebra::{Point3, Vector3};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use thiserror::Error;
+use tonic::transport::Channel;
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "graspctl",
+    version,
+    about = "Client of the graspd grasp-planning service"
+)]
+struct Cli {
+    /// graspd's gRPC address.
+    #[arg(
+        long,
+        global = true,
+        env = "GRASPD_SERVER",
+        default_value = "http://127.0.0.1:50051"
+    )]
+    server: String,
+    /// Print the server's answer as JSON (the REST API's shape) instead of a summary.
+    #[arg(long, global = true)]
+    json: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Plan a grasp on a point-cloud file (PCD or PLY, ASCII or binary).
+    Plan(PlanArgs),
+    /// List the server's hands, or show one.
+    Hands {
+        /// Show this hand in detail.
+        name: Option<String>,
+    },
+}
+
+#[derive(Debug, Args)]
+struct PlanArgs {
+    /// The cloud file (PCD or PLY), in metres.
+    #[arg(long, value_name = "FILE")]
+    cloud: PathBuf,
+    /// A hand of the server (see `graspctl hands`).
+    #[arg(
+        long,
+        value_name = "NAME",
+        required_unless_present = "hand_file",
+        conflicts_with = "hand_file"
+    )]
+    hand: Option<String>,
+    /// An inline hand description (TOML, the format of the server's hand files).
+    #[arg(long, value_name = "FILE")]
+    hand_file: Option<PathBuf>,
+    /// RNG seed: the same request and seed give the same plan.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Force a grasp type: large_wrap, small_wrap, power, pinch, precision, tripod.
+    #[arg(long, value_name = "TYPE")]
+    grasp_type: Option<GraspType>,
+    /// The support plane n·x + d = 0 as nx,ny,nz,d (n toward the object).
+    #[arg(long, value_name = "NX,NY,NZ,D", value_parser = parse_plane, allow_hyphen_values = true)]
+    support_plane: Option<Plane>,
+    /// Sensor position in the cloud's frame, x,y,z.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
+    viewpoint: Option<Point3<f64>>,
+    /// Approach near this point, x,y,z.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
+    attention: Option<Point3<f64>>,
+    /// The "without opposition" ablation (Table 5.1): skip stage 1.
+    #[arg(long)]
+    without_opposition: bool,
+}
+
+fn parse_numbers<const N: usize>(s: &str) -> Result<[f64; N], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("'{s}': {e}"))?;
+    v.try_into().map_err(|v: Vec<f64>| {
+        format!(
+            "'{s}': expected {N} comma-separated numbers, got {}",
+            v.len()
+        )
+    })
+}
+
+fn parse_point(s: &str) -> Result<Point3<f64>, String> {
+    parse_numbers::<3>(s).map(Point3::from)
+}
+
+fn parse_plane(s: &str) -> Result<Plane, String> {
+    let [x, y, z, d] = parse_numbers::<4>(s)?;
+    Plane::checked(Vector3::new(x, y, z), d, "--support-plane").map_err(|e| e.message)
+}
+
+#[derive(Debug, Error)]
+enum CliError {
+    #[error("cannot read {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {error}")]
+    File { path: PathBuf, error: FieldError },
+    #[error("cannot connect to {server}: {source}")]
+    Connect {
+        server: String,
+        source: tonic::transport::Error,
+    },
+    #[error("the server answered {code:?}: {message}", code = .0.code(), message = .0.message())]
+    Status(#[from] tonic::Status),
+    #[error("the server's answer is malformed: {0}")]
+    Answer(FieldError),
+    #[error("cannot write JSON: {0}")]
+    Json(#[from] serde_json::Error),
+}
+
+fn read(path: &PathBuf) -> Result<Vec<u8>, CliError> {
+    std::fs::read(path).map_err(|source| CliError::Read {
+        path: path.clone(),
+        source,
+    })
+}
+
+async fn connect(server: &str) -> Result<GraspPlannerClient<Channel>, CliError> {
+    GraspPlannerClient::connect(server.to_string())
+        .await
+        .map_err(|source| CliError::Connect {
+            server: server.to_string(),
+            source,
+        })
+}
+
+fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
+    let cloud = read_cloud_file(&read(&args.cloud)?).map_err(|error| CliError::File {
+        path: args.cloud.clone(),
+        error,
+    })?;
+    let hand = match (&args.hand, &args.hand_file) {
+        (_, Some(path)) => {
+            let text = String::from_utf8_lossy(&read(path)?).into_owned();
+            HandChoice::Inline(Box::new(parse_hand_toml(&text).map_err(|error| {
+                CliError::File {
+                    path: path.clone(),
+                    error,
+                }
+            })?))
+        }
+        (Some(name), None) => HandChoice::Name(name.clone()),
+        (None, None) => unreachable!("clap requires --hand or --hand-file"),
+    };
+    Ok(PlanRequest {
+        source: PlanSource::Cloud(cloud),
+        hand,
+        options: PlannerOptions {
+            seed: args.seed,
+            mode: if args.without_opposition {
+                PlannerMode::WithoutOpposition
+            } else {
+                PlannerMode::DualStage
+            },
+            ..PlannerOptions::default()
+        },
+        hints: PlanHints {
+            grasp_type: args.grasp_type,
+            attention_point: args.attention,
+            support_plane: args.support_plane,
+            viewpoint: args.viewpoint,
+            up: None,
+        },
+        image_hints: ImageHints::default(),
+    })
+}
+
+async fn run(cli: Cli) -> Result<(), CliError> {
+    match &cli.command {
+        Command::Plan(args) => {
+            let request = convert::plan_request_to_proto(&build_request(args)?);
+            let mut client = connect(&cli.server).await?;
+            let response = client.plan_grasp(request).await?.into_inner();
+            let plan = convert::plan_from_proto(response).map_err(CliError::Answer)?;
+            if cli.json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&PlanResponseJson::from(&plan))?
+                );
+            } else {
+                print!("{}", summary::plan(&plan));
+            }
+        }
+        Command::Hands { name: None } => {
+            let mut client = connect(&cli.server).await?;
+            let response = client
+                .list_hands(pb::ListHandsRequest {})
+                .await?
+                .into_inner();
+            let hands = response
+                .hands
+                .into_iter()
+                .map(|h| convert::hand_from_proto(h, "hands[]"))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(CliError::Answer)?;
+            if cli.json {
+                println!("{}", serde_json::to_string_pretty(&HandsJson { hands })?);
+            } else {
+                print!("{}", summary::hands(&hands));
+            }
+        }
+        Command::Hands { name: Some(name) } => {
+            let mut client = connect(&cli.server).await?;
+            let response = client
+                .get_hand(pb::GetHandRequest { name: name.clone() })
+                .await?
+                .into_inner();
+            let hand = response
+                .hand
+                .ok_or_else(|| CliError::Answer(FieldError::new("hand", "missing")))?;
+            let hand = convert::hand_from_proto(hand, "hand").map_err(CliError::Answer)?;
+            if cli.json {
+                println!("{}", serde_json::to_string_pretty(&HandJson::from(hand))?);
+            } else {
+                print!("{}", summary::hand(&hand));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let runtime = match tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+    {
+        Ok(rt) => rt,
+        Err(e) => {
+            eprintln!("graspctl: cannot start the async runtime: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    match runtime.block_on(run(cli)) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("graspctl: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
