@@ -58,7 +58,14 @@ fn percentile(v: &mut [f64], q: f64) -> f64 {
     v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
-fn input(object: Object, hand: &str, seed: u64, mode: PlannerMode, thesis_rule: bool, forced: Option<GraspType>) -> PlanInput {
+fn input(
+    object: Object,
+    hand: &str,
+    seed: u64,
+    mode: PlannerMode,
+    thesis_rule: bool,
+    forced: Option<GraspType>,
+) -> PlanInput {
     let v = standard_view(object, 2000, seed);
     let mut options = PlannerOptions {
         seed,
@@ -87,7 +94,9 @@ fn main() {
     let seeds: u64 = if quick { 3 } else { 11 };
     println!("# graspd planner benchmark (2,000-point single views, one thread)\n");
     println!("## Service defaults: per hand over the 8 objects × {seeds} seeds\n");
-    println!("| hand | median ms/plan (with) | p90 ms (with) | feasible (with) | median ms (without) | feasible (without) | median |Φ| with | median |Φ| without | with/without time |");
+    println!(
+        "| hand | median ms/plan (with) | p90 ms (with) | feasible (with) | median ms (without) | feasible (without) | median |Φ| with | median |Φ| without | with/without time |"
+    );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     let mut all_with = Vec::new();
     for hand in ["parallel_gripper", "barrett", "shadow"] {
@@ -95,8 +104,22 @@ fn main() {
         let (mut fw, mut fo, mut n) = (0, 0, 0);
         for object in OBJECTS {
             for seed in 0..seeds {
-                let w = run(&input(object, hand, seed, PlannerMode::DualStage, false, None));
-                let o = run(&input(object, hand, seed, PlannerMode::WithoutOpposition, false, None));
+                let w = run(&input(
+                    object,
+                    hand,
+                    seed,
+                    PlannerMode::DualStage,
+                    false,
+                    None,
+                ));
+                let o = run(&input(
+                    object,
+                    hand,
+                    seed,
+                    PlannerMode::WithoutOpposition,
+                    false,
+                    None,
+                ));
                 tw.push(w.seconds * 1e3);
                 to.push(o.seconds * 1e3);
                 sw.push(w.space);
@@ -116,19 +139,45 @@ fn main() {
             100.0 * mw / mo
         );
     }
-    println!("\nAll hands, with opposition: median {:.2} ms, p90 {:.2} ms per plan.\n", median(&mut all_with), percentile(&mut all_with, 0.9));
+    println!(
+        "\nAll hands, with opposition: median {:.2} ms, p90 {:.2} ms per plan.\n",
+        median(&mut all_with),
+        percentile(&mut all_with, 0.9)
+    );
 
-    println!("## Table 5.1 setting: tripod with the Shadow hand, thesis iteration rule (10 % of |Φ|)\n");
-    println!("| object (#points) | with: |Φ_g| | with: time (s) | with: Q / feasible | without: |Φ_g| | without: time (s) | without: Q / feasible | time with/without |");
+    println!(
+        "## Table 5.1 setting: tripod with the Shadow hand, thesis iteration rule (10 % of |Φ|)\n"
+    );
+    println!(
+        "| object (#points) | with: |Φ_g| | with: time (s) | with: Q / feasible | without: |Φ_g| | without: time (s) | without: Q / feasible | time with/without |"
+    );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|");
     let table_seeds = if quick { 1 } else { 3 };
     let (mut sum_w, mut sum_o) = (0.0, 0.0);
-    for object in [Object::TomatoSoupCan, Object::PottedMeatCan, Object::MustardBottle] {
+    for object in [
+        Object::TomatoSoupCan,
+        Object::PottedMeatCan,
+        Object::MustardBottle,
+    ] {
         let (mut tw, mut to) = (Vec::new(), Vec::new());
         let (mut w_last, mut o_last) = (None, None);
         for seed in 0..table_seeds {
-            let w = run(&input(object, "shadow", seed, PlannerMode::DualStage, true, Some(GraspType::Tripod)));
-            let o = run(&input(object, "shadow", seed, PlannerMode::WithoutOpposition, true, Some(GraspType::Tripod)));
+            let w = run(&input(
+                object,
+                "shadow",
+                seed,
+                PlannerMode::DualStage,
+                true,
+                Some(GraspType::Tripod),
+            ));
+            let o = run(&input(
+                object,
+                "shadow",
+                seed,
+                PlannerMode::WithoutOpposition,
+                true,
+                Some(GraspType::Tripod),
+            ));
             tw.push(w.seconds);
             to.push(o.seconds);
             w_last = Some(w);
@@ -140,7 +189,15 @@ fn main() {
         sum_o += mo;
         println!(
             "| {} (2000) | {:.3e} | {mw:.4} | {:.3} / {} | {:.3e} ({} it.) | {mo:.3} | {:.3} / {} | {:.2} % |",
-            object.short_name(), w.space, w.objective, w.feasible, o.space, o.iterations, o.objective, o.feasible, 100.0 * mw / mo
+            object.short_name(),
+            w.space,
+            w.objective,
+            w.feasible,
+            o.space,
+            o.iterations,
+            o.objective,
+            o.feasible,
+            100.0 * mw / mo
         );
     }
     println!(

@@ -1,7 +1,7 @@
 //! The planner on synthetic single-view clouds of simple shapes with known geometry.
 
 use graspd_core::cloud::{Plane, PointCloud};
-use graspd_core::planning::{PlannerMode, PlanHints, PlanInput, PlannerOptions, plan};
+use graspd_core::planning::{PlanHints, PlanInput, PlannerMode, PlannerOptions, plan};
 use graspd_core::{GraspType, HandCatalog};
 use nalgebra::{Point3, Vector3};
 
@@ -65,10 +65,23 @@ fn input(points: Vec<Point3<f64>>, hand: &str, view: Point3<f64>, seed: u64) -> 
 fn report(p: &graspd_core::GraspPlan) -> String {
     format!(
         "{} {:?} feasible={} reason={:?} S={:.3} R={:.3} G={:.3} Q={:.3} eps={:.4} a={:.4} h={:.4} it1={} it2={} t={:.2}ms timings={:?} col={:?} warn={:?}",
-        p.hand, p.grasp_type, p.feasible, p.infeasible_reason, p.quality.gii, p.quality.reachability,
-        p.quality.attention, p.quality.objective, p.quality.epsilon, p.quality.aperture_or_area,
-        p.quality.palm_height, p.stage1.iterations, p.stage2.iterations, p.timings.total * 1e3, p.timings,
-        p.collision, p.warnings
+        p.hand,
+        p.grasp_type,
+        p.feasible,
+        p.infeasible_reason,
+        p.quality.gii,
+        p.quality.reachability,
+        p.quality.attention,
+        p.quality.objective,
+        p.quality.epsilon,
+        p.quality.aperture_or_area,
+        p.quality.palm_height,
+        p.stage1.iterations,
+        p.stage2.iterations,
+        p.timings.total * 1e3,
+        p.timings,
+        p.collision,
+        p.warnings
     )
 }
 
@@ -89,7 +102,11 @@ fn every_builtin_hand_plans_on_a_can_and_a_sphere() {
                 .unwrap()
                 .contact_count();
             assert_eq!(plan.contacts.len(), want, "{hand} {name}");
-            assert!(plan.feasible, "{hand} on {name}: {:?}", plan.infeasible_reason);
+            assert!(
+                plan.feasible,
+                "{hand} on {name}: {:?}",
+                plan.infeasible_reason
+            );
             assert!(plan.quality.gii >= 0.7);
             let [n1, n2] = plan.opposition.normals;
             assert!(n1.dot(&n2) < -0.5, "opposed normals");

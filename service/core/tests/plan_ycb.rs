@@ -49,24 +49,45 @@ fn dissertation_objects_with_every_builtin_hand() {
             let (p, cloud) = plan_view(object, hand, 1);
             println!(
                 "{hand:16} {:22} {:10} feasible={} S={:.2} R={:.2} G={:.2} eps={:.3} it=({},{}) best_at=({},{}) t={:.1}ms {:?}",
-                object.id(), p.grasp_type.name(), p.feasible, p.quality.gii, p.quality.reachability,
-                p.quality.attention, p.quality.epsilon, p.stage1.iterations, p.stage2.iterations,
-                p.stage1.best_iteration, p.stage2.best_iteration, p.timings.total * 1e3, p.infeasible_reason
+                object.id(),
+                p.grasp_type.name(),
+                p.feasible,
+                p.quality.gii,
+                p.quality.reachability,
+                p.quality.attention,
+                p.quality.epsilon,
+                p.stage1.iterations,
+                p.stage2.iterations,
+                p.stage1.best_iteration,
+                p.stage2.best_iteration,
+                p.timings.total * 1e3,
+                p.infeasible_reason
             );
-            println!(
-                "    normals {:.2} type {:.2} s1 {:.2} s2 {:.2} fin {:.2} ms",
-                p.timings.normals * 1e3, p.timings.grasp_type * 1e3, p.timings.stage1 * 1e3, p.timings.stage2 * 1e3, p.timings.finalize * 1e3
-            );
-            let m = catalog.get(hand).unwrap().resolve_forced(p.grasp_type).unwrap().contact_count();
+            let m = catalog
+                .get(hand)
+                .unwrap()
+                .resolve_forced(p.grasp_type)
+                .unwrap()
+                .contact_count();
             assert_eq!(p.contacts.len(), m, "{hand} {object:?}");
             for c in &p.contacts {
-                let d = cloud.points.iter().map(|q| (q - c.position).norm()).fold(f64::INFINITY, f64::min);
-                assert!(d <= 0.003, "{hand} {object:?}: contact {d} m from the cloud");
+                let d = cloud
+                    .points
+                    .iter()
+                    .map(|q| (q - c.position).norm())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    d <= 0.003,
+                    "{hand} {object:?}: contact {d} m from the cloud"
+                );
                 assert_eq!(cloud.points[c.point_index], c.position);
             }
             if p.feasible {
                 let [n1, n2] = p.opposition.normals;
-                assert!(n1.angle(&n2).to_degrees() > 120.0, "{hand} {object:?}: opposition normals");
+                assert!(
+                    n1.angle(&n2).to_degrees() > 120.0,
+                    "{hand} {object:?}: opposition normals"
+                );
                 assert!(p.quality.gii >= 0.7, "{hand} {object:?}");
                 assert!(p.collision.clear, "{hand} {object:?}: {:?}", p.collision);
                 assert!(p.collision.min_plane_clearance.unwrap() >= -0.001);
@@ -76,8 +97,8 @@ fn dissertation_objects_with_every_builtin_hand() {
             }
         }
     }
-    // Measured with seed 1: 18 of 24 feasible. The misses are single-view limits (the far wall of
-    // the flat tuna can is never seen from 40° above; the banana lies 37 mm high) or S just under
-    // ε, and each carries its reason. A regression below 18 fails.
-    assert!(infeasible.len() <= 6, "infeasible: {infeasible:?}");
+    // Measured with seed 1: 21 of 24 feasible. The misses (Barrett and Shadow on the banana, which
+    // lies 37 mm high and curved; Shadow's five-contact precision grasp on the flat tuna can, whose
+    // far wall a view from 40° above never sees) each carry their reason. Fewer than 20 fails.
+    assert!(infeasible.len() <= 4, "infeasible: {infeasible:?}");
 }

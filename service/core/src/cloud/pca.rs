@@ -36,14 +36,22 @@ pub fn eigen(cov: &Matrix3<f64>) -> ([f64; 3], [Vector3<f64>; 3]) {
     };
     (
         [e.eigenvalues.x, e.eigenvalues.y, e.eigenvalues.z],
-        [v(e.eigenvectors.x_axis), v(e.eigenvectors.y_axis), v(e.eigenvectors.z_axis)],
+        [
+            v(e.eigenvectors.x_axis),
+            v(e.eigenvectors.y_axis),
+            v(e.eigenvectors.z_axis),
+        ],
     )
 }
 
 /// Unit eigenvector of the smallest eigenvalue: the normal of a best-fit plane.
 pub fn smallest_axis(cov: &Matrix3<f64>) -> Vector3<f64> {
     let v = eigen(cov).1[0];
-    if v.iter().all(|x| x.is_finite()) { v } else { Vector3::z() }
+    if v.iter().all(|x| x.is_finite()) {
+        v
+    } else {
+        Vector3::z()
+    }
 }
 
 #[cfg(test)]
@@ -60,6 +68,10 @@ mod tests {
         assert!(smallest_axis(&cov).z.abs() > 0.999999);
         let (vals, vecs) = eigen(&cov);
         assert!(vals[0] <= vals[1] && vals[1] <= vals[2]);
-        assert!(vecs[2].x.abs() > 0.999, "longest axis along x: {:?}", vecs[2]);
+        assert!(
+            vecs[2].x.abs() > 0.999,
+            "longest axis along x: {:?}",
+            vecs[2]
+        );
     }
 }

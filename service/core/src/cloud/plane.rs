@@ -167,7 +167,13 @@ pub fn detect_support_plane(
         }
         ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2)).sqrt()
     };
-    let table_extent = extent(&mut points.iter().zip(&inlier).filter(|(_, i)| **i).map(|(p, _)| p));
+    let table_extent = extent(
+        &mut points
+            .iter()
+            .zip(&inlier)
+            .filter(|(_, i)| **i)
+            .map(|(p, _)| p),
+    );
     let object_extent = extent(&mut rest.iter().copied());
     if table_extent < 1.5 * object_extent {
         return None;
@@ -187,7 +193,11 @@ mod tests {
         let mut pts = Vec::new();
         for i in 0..40 {
             for j in 0..40 {
-                pts.push(Point3::new(i as f64 * 0.01 - 0.2, j as f64 * 0.01 - 0.2, 0.0));
+                pts.push(Point3::new(
+                    i as f64 * 0.01 - 0.2,
+                    j as f64 * 0.01 - 0.2,
+                    0.0,
+                ));
             }
         }
         // A 6 cm cube's top and one side.

@@ -181,23 +181,48 @@ mod tests {
     #[test]
     fn validation_names_the_problem() {
         let mut empty = PointCloud::default();
-        assert!(empty.validate("cloud", 10).unwrap_err().message.contains("empty"));
+        assert!(
+            empty
+                .validate("cloud", 10)
+                .unwrap_err()
+                .message
+                .contains("empty")
+        );
         let mut few = PointCloud::new(grid(5));
-        assert!(few.validate("cloud", 100).unwrap_err().message.contains("at least"));
+        assert!(
+            few.validate("cloud", 100)
+                .unwrap_err()
+                .message
+                .contains("at least")
+        );
         let mut many = PointCloud::new(grid(50));
-        assert!(many.validate("cloud", 40).unwrap_err().message.contains("limit"));
+        assert!(
+            many.validate("cloud", 40)
+                .unwrap_err()
+                .message
+                .contains("limit")
+        );
         let mut nan = PointCloud::new(grid(50));
         nan.points[7].y = f64::NAN;
-        assert_eq!(nan.validate("cloud", 100).unwrap_err().field, "cloud.points[7]");
+        assert_eq!(
+            nan.validate("cloud", 100).unwrap_err().field,
+            "cloud.points[7]"
+        );
         let mut inf = PointCloud::new(grid(50));
         inf.points[3].x = f64::INFINITY;
-        assert_eq!(inf.validate("cloud", 100).unwrap_err().field, "cloud.points[3]");
+        assert_eq!(
+            inf.validate("cloud", 100).unwrap_err().field,
+            "cloud.points[3]"
+        );
         let mut ok = PointCloud::new(grid(50));
         ok.normals = Some(vec![Vector3::new(0.0, 0.0, 2.0); 50]);
         ok.validate("cloud", 100).unwrap();
         assert!((ok.normals.as_ref().unwrap()[0].norm() - 1.0).abs() < 1e-12);
         let mut badn = PointCloud::new(grid(50));
         badn.normals = Some(vec![Vector3::zeros(); 50]);
-        assert_eq!(badn.validate("cloud", 100).unwrap_err().field, "cloud.normals[0]");
+        assert_eq!(
+            badn.validate("cloud", 100).unwrap_err().field,
+            "cloud.normals[0]"
+        );
     }
 }

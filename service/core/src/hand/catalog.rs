@@ -105,11 +105,17 @@ mod tests {
             parse_hand_toml(&bad).unwrap_err().field,
             "hand.geometry.max_aperture"
         );
-        let bad = text.replace("h2 = [\"f1\", \"f2\"]\n\n[[grasp_types]]\ntype = \"power\"", "h2 = [\"f9\"]\n\n[[grasp_types]]\ntype = \"power\"");
+        let bad = text.replace(
+            "h2 = [\"f1\", \"f2\"]\n\n[[grasp_types]]\ntype = \"power\"",
+            "h2 = [\"f9\"]\n\n[[grasp_types]]\ntype = \"power\"",
+        );
         let e = parse_hand_toml(&bad).unwrap_err();
         assert_eq!(e.field, "hand.grasp_types[0].h2");
         assert!(e.message.contains("f9"));
         let bad = text.replace("parts = [\"TT\", \"TS\"]", "parts = [\"FT\"]");
-        assert_eq!(parse_hand_toml(&bad).unwrap_err().field, "hand.fingers[0].parts");
+        assert_eq!(
+            parse_hand_toml(&bad).unwrap_err().field,
+            "hand.fingers[0].parts"
+        );
     }
 }

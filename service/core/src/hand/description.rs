@@ -142,10 +142,7 @@ impl HandDescription {
     /// Checks every field; the error names the offending field as `hand.<path>`.
     pub fn validate(&self) -> Result<(), FieldError> {
         if self.name.trim().is_empty() || self.name.len() > 64 {
-            return Err(FieldError::new(
-                "hand.name",
-                "must be 1 to 64 characters",
-            ));
+            return Err(FieldError::new("hand.name", "must be 1 to 64 characters"));
         }
         if !self
             .name
@@ -164,8 +161,7 @@ impl HandDescription {
         positive("hand.geometry.max_aperture".into(), g.max_aperture, 1.0)?;
         positive("hand.geometry.max_height".into(), g.max_height, 1.0)?;
         positive("hand.geometry.finger_width".into(), g.finger_width, 0.2)?;
-        if !g.min_aperture.is_finite() || g.min_aperture < 0.0 || g.min_aperture >= g.max_aperture
-        {
+        if !g.min_aperture.is_finite() || g.min_aperture < 0.0 || g.min_aperture >= g.max_aperture {
             return Err(FieldError::new(
                 "hand.geometry.min_aperture",
                 format!(
@@ -257,7 +253,10 @@ impl HandDescription {
             if self.realisation(e.grasp_type).is_some() {
                 return Err(FieldError::new(
                     format!("hand.equivalent_types[{i}].type"),
-                    format!("{} is realised directly; it cannot also be an equivalent", e.grasp_type),
+                    format!(
+                        "{} is realised directly; it cannot also be an equivalent",
+                        e.grasp_type
+                    ),
                 ));
             }
         }
@@ -355,9 +354,7 @@ impl HandDescription {
                 .find(|e| e.grasp_type == t)?
                 .same_as
         };
-        let mut r = self
-            .resolve_realisation(self.realisation(target)?)
-            .ok()?;
+        let mut r = self.resolve_realisation(self.realisation(target)?).ok()?;
         r.requested = t;
         Some(r)
     }
@@ -411,7 +408,9 @@ impl HandDescription {
             .collect();
         let (lo, hi) = ys
             .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &y| (l.min(y), h.max(y)));
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &y| {
+                (l.min(y), h.max(y))
+            });
         if lo.is_finite() {
             (hi - lo) + self.geometry.finger_width
         } else {

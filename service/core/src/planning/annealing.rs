@@ -122,7 +122,10 @@ pub fn anneal<P: SearchProblem>(
     let mut cur_merit = first.merit;
     let mut best = first.feasible.then(|| (init.clone(), first.merit));
     let mut best_any = (init, first.merit);
-    let mut improvements = best.iter().map(|(c, m)| (0, *m, c.clone())).collect::<Vec<_>>();
+    let mut improvements = best
+        .iter()
+        .map(|(c, m)| (0, *m, c.clone()))
+        .collect::<Vec<_>>();
     let (mut evaluations, mut accepted, mut last_gain) = (1usize, 0usize, 0usize);
     let mut k = 0;
     while k < schedule.iterations {
@@ -190,9 +193,15 @@ mod tests {
         fn evaluate(&mut self, c: &[usize], _: f64, _: f64) -> Scored {
             let q = -((c[0] as f64 - 30.0).abs() + (c[1] as f64 - 70.0).abs()) / 100.0;
             if c[0] < c[1] {
-                Scored { merit: q, feasible: true }
+                Scored {
+                    merit: q,
+                    feasible: true,
+                }
             } else {
-                Scored { merit: -10.0 - (c[0] - c[1]) as f64 / 100.0, feasible: false }
+                Scored {
+                    merit: -10.0 - (c[0] - c[1]) as f64 / 100.0,
+                    feasible: false,
+                }
             }
         }
     }
@@ -201,7 +210,11 @@ mod tests {
         Toy {
             cands: (0..100).collect(),
             nb: (0..100usize)
-                .map(|i| (i.saturating_sub(3)..(i + 4).min(100)).filter(|&j| j != i).collect())
+                .map(|i| {
+                    (i.saturating_sub(3)..(i + 4).min(100))
+                        .filter(|&j| j != i)
+                        .collect()
+                })
                 .collect(),
         }
     }
@@ -210,7 +223,12 @@ mod tests {
     fn finds_the_optimum_and_is_deterministic_per_seed() {
         let run = |seed| {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
-            anneal(&mut toy(), vec![90, 10], Schedule::new(3000, 100, 800), &mut rng)
+            anneal(
+                &mut toy(),
+                vec![90, 10],
+                Schedule::new(3000, 100, 800),
+                &mut rng,
+            )
         };
         let a = run(7);
         let (cfg, merit) = a.best.clone().unwrap();
@@ -224,7 +242,12 @@ mod tests {
     #[test]
     fn stops_early_without_progress() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let a = anneal(&mut toy(), vec![30, 70], Schedule::new(100_000, 50, 200), &mut rng);
+        let a = anneal(
+            &mut toy(),
+            vec![30, 70],
+            Schedule::new(100_000, 50, 200),
+            &mut rng,
+        );
         assert!(a.iterations < 1000, "{}", a.iterations);
     }
 }

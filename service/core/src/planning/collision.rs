@@ -1,7 +1,8 @@
 //! Collision check of the posed hand (method.md §3) against the support plane and the scene cloud,
 //! with parry3d shapes: the palm as a box behind the palm surface, each finger in use as two
-//! capsules — base → a point off the contact along its normal → the fingertip resting on the
-//! contact. Fingers not in the grasp are taken as flexed out of the way (not checked).
+//! capsules — base → a point off the contact (along its normal tilted 45° toward the palm) →
+//! the fingertip resting on the contact. Fingers not in the grasp are taken as flexed out of the way (not checked). For the
+//! approach the same chains are pre-shaped 2 cm open along the contact normals.
 //!
 //! Points count as colliding only when they lie deeper than `tolerance` inside a shape, so that the
 //! contacts themselves and sensor noise do not; a configuration collides when at least
@@ -45,9 +46,23 @@ pub struct FingerContact {
     pub normal: Vector3<f64>,
 }
 
-fn palm_geometry(hand: &HandDescription, pose: &Pose, back_off: f64) -> (Pose3, Cuboid, [Point3<f64>; 8]) {
+/// Direction from a contact back along the finger's last segment: the outward normal tilted 45°
+/// toward the palm (fingers reach a contact from the palm's side, never from behind the object).
+pub fn distal_direction(normal: &Vector3<f64>, approach: &Vector3<f64>) -> Vector3<f64> {
+    (normal - approach).try_normalize(1e-9).unwrap_or(*normal)
+}
+
+fn palm_geometry(
+    hand: &HandDescription,
+    pose: &Pose,
+    back_off: f64,
+) -> (Pose3, Cuboid, [Point3<f64>; 8]) {
     let g = &hand.geometry;
-    let half = Vector3::new(g.palm_length / 2.0, g.palm_width / 2.0, g.palm_thickness / 2.0);
+    let half = Vector3::new(
+        g.palm_length / 2.0,
+        g.palm_width / 2.0,
+        g.palm_thickness / 2.0,
+    );
     let iso = pose.isometry();
     let center_local = Point3::new(0.0, 0.0, -half.z - back_off);
     let center = iso * center_local;
@@ -57,32 +72,37 @@ fn palm_geometry(hand: &HandDescription, pose: &Pose, back_off: f64) -> (Pose3, 
     let mut corners = [Point3::origin(); 8];
     for (k, c) in corners.iter_mut().enumerate() {
         let s = |b: usize| if k >> b & 1 == 1 { 1.0 } else { -1.0 };
-        *c = iso
-            * Point3::new(
-                s(0) * half.x,
-                s(1) * half.y,
-                center_local.z + s(2) * half.z,
-            );
+        *c = iso * Point3::new(s(0) * half.x, s(1) * half.y, center_local.z + s(2) * half.z);
     }
-    (palm_pose, Cuboid::new(PVec::new(half.x, half.y, half.z)), corners)
+    (
+        palm_pose,
+        Cuboid::new(PVec::new(half.x, half.y, half.z)),
+        corners,
+    )
 }
 
 impl PosedHand {
     /// The hand at the final grasp: palm at `pose` (touching the object when `palm_contact`), the
     /// listed fingers resting on their contacts.
-    pub fn at_grasp(hand: &HandDescription, pose: &Pose, fingers: &[FingerContact], palm_contact: bool) -> Self {
+    pub fn at_grasp(
+        hand: &HandDescription,
+        pose: &Pose,
+        fingers: &[FingerContact],
+        palm_contact: bool,
+    ) -> Self {
         // A palm in contact is backed off by the tolerance so that touching is not colliding.
         let back = if palm_contact { DEFAULT_TOLERANCE } else { 0.0 };
         let (palm_pose, palm, palm_corners) = palm_geometry(hand, pose, back);
         let iso = pose.isometry();
         let r = hand.geometry.finger_width / 2.0;
+        let approach = pose.orientation * Vector3::z();
         let capsules = fingers
             .iter()
             .flat_map(|f| {
                 let finger = &hand.fingers[f.finger];
                 let base = iso * Point3::from(finger.base);
                 let tip = f.position + f.normal * r;
-                let pre = f.position + f.normal * (r + 0.35 * finger.length);
+                let pre = tip + distal_direction(&f.normal, &approach) * (0.35 * finger.length);
                 [(base, pre, r), (pre, tip, r)]
             })
             .collect();
@@ -94,33 +114,37 @@ impl PosedHand {
         }
     }
 
-    /// The hand with its fingers open (tips at ± a_max/2 across the closing direction), palm at
-    /// `pose`: the pre-grasp and the approach.
-    pub fn open(hand: &HandDescription, pose: &Pose, fingers: &[usize]) -> Self {
-        let (palm_pose, palm, palm_corners) = palm_geometry(hand, pose, 0.0);
-        let iso = pose.isometry();
-        let r = hand.geometry.finger_width / 2.0;
-        let half_open = hand.geometry.max_aperture / 2.0 + r;
-        let capsules = fingers
+    /// The hand pre-shaped for the approach: the grasp's finger chains with each fingertip backed
+    /// off `margin` along its contact normal (slightly open around the object, as a hand
+    /// approaches before it closes), the whole hand moved by `shift` (e.g. back along the
+    /// approach to the pre-grasp).
+    pub fn preshaped(
+        hand: &HandDescription,
+        pose: &Pose,
+        fingers: &[FingerContact],
+        margin: f64,
+        shift: Vector3<f64>,
+    ) -> Self {
+        let approach = pose.orientation * Vector3::z();
+        let opened: Vec<FingerContact> = fingers
             .iter()
-            .map(|&i| {
-                let f = &hand.fingers[i];
-                let side = if f.thumb { -1.0 } else { 1.0 };
-                let base = Point3::from(f.base);
-                let tip = Point3::new(
-                    side * half_open.max(base.x.abs()),
-                    base.y,
-                    0.9 * f.length,
-                );
-                (iso * base, iso * tip, r)
+            .map(|f| FingerContact {
+                position: f.position + distal_direction(&f.normal, &approach) * margin,
+                ..*f
             })
             .collect();
-        Self {
-            palm_pose,
-            palm,
-            palm_corners,
-            capsules,
-        }
+        let moved = Pose {
+            position: pose.position + shift,
+            orientation: pose.orientation,
+        };
+        let mut h = Self::at_grasp(hand, &moved, &[], false);
+        let r = hand.geometry.finger_width / 2.0;
+        h.capsules = Self::at_grasp(hand, pose, &opened, false)
+            .capsules
+            .into_iter()
+            .map(|(a, b, _)| (a + shift, b + shift, r))
+            .collect();
+        h
     }
 
     /// Least signed distance of the hand geometry to the plane (negative: below it).
@@ -138,7 +162,13 @@ impl PosedHand {
 
     /// Number of cloud points deeper than `tolerance` inside the hand geometry, counting at most
     /// `limit` (the search only needs to know whether a configuration collides).
-    pub fn points_inside(&self, points: &[Point3<f64>], index: &CloudIndex, tolerance: f64, limit: usize) -> usize {
+    pub fn points_inside(
+        &self,
+        points: &[Point3<f64>],
+        index: &CloudIndex,
+        tolerance: f64,
+        limit: usize,
+    ) -> usize {
         // "Deeper than the tolerance inside a shape" = inside the shape shrunk by the tolerance;
         // points are tested in each shape's local frame (cheap exact tests, no projections).
         let mut seen: Vec<usize> = Vec::new();
@@ -182,7 +212,13 @@ mod tests {
 
     fn grid_plane() -> Vec<Point3<f64>> {
         (0..400)
-            .map(|i| Point3::new((i % 20) as f64 * 0.01 - 0.1, (i / 20) as f64 * 0.01 - 0.1, 0.0))
+            .map(|i| {
+                Point3::new(
+                    (i % 20) as f64 * 0.01 - 0.1,
+                    (i / 20) as f64 * 0.01 - 0.1,
+                    0.0,
+                )
+            })
             .collect()
     }
 
@@ -196,15 +232,28 @@ mod tests {
         let idx = CloudIndex::new(&pts);
         let contacts = |z: f64| {
             [
-                FingerContact { finger: 0, point: 0, position: Point3::new(-0.03, 0.0, z), normal: -Vector3::x() },
-                FingerContact { finger: 1, point: 1, position: Point3::new(0.03, 0.0, z), normal: Vector3::x() },
+                FingerContact {
+                    finger: 0,
+                    point: 0,
+                    position: Point3::new(-0.03, 0.0, z),
+                    normal: -Vector3::x(),
+                },
+                FingerContact {
+                    finger: 1,
+                    point: 1,
+                    position: Point3::new(0.03, 0.0, z),
+                    normal: Vector3::x(),
+                },
             ]
         };
         // Contacts 5 cm up, palm 4 cm above them: clear of the table and its points.
         let pose = hand_pose(&Point3::new(0.0, 0.0, 0.05), &frame, 0.04);
         let posed = PosedHand::at_grasp(hand, &pose, &contacts(0.05), false);
         assert!(posed.plane_clearance(&table) > 0.0);
-        assert_eq!(posed.points_inside(&pts, &idx, DEFAULT_TOLERANCE, usize::MAX), 0);
+        assert_eq!(
+            posed.points_inside(&pts, &idx, DEFAULT_TOLERANCE, usize::MAX),
+            0
+        );
         // Contacts 5 mm up: the fingertips (radius 11 mm) reach into the table.
         let pose = hand_pose(&Point3::new(0.0, 0.0, 0.005), &frame, 0.04);
         let posed = PosedHand::at_grasp(hand, &pose, &contacts(0.005), false);
@@ -213,18 +262,46 @@ mod tests {
     }
 
     #[test]
-    fn open_fingers_span_the_aperture() {
+    fn preshaped_fingers_back_off_and_follow_the_shift() {
         let c = HandCatalog::builtin();
         let hand = c.get("parallel_gripper").unwrap();
         let frame = finger_frame(&Vector3::x(), &[-Vector3::z()]).unwrap();
-        let pose = hand_pose(&Point3::new(0.0, 0.0, 0.2), &frame, 0.0);
-        let open = PosedHand::open(hand, &pose, &[0, 1]);
-        // A point between the open fingers, under the palm, is not inside the hand.
-        let pts = vec![Point3::new(0.0, 0.0, 0.17); 1];
-        let idx = CloudIndex::new(&pts);
-        assert_eq!(open.points_inside(&pts, &idx, 0.0, usize::MAX), 0);
-        let on_finger = vec![Point3::new(0.0425 + 0.011, 0.0, 0.2 - 0.03)];
-        let idx = CloudIndex::new(&on_finger);
-        assert_eq!(open.points_inside(&on_finger, &idx, 0.0, usize::MAX), 1);
+        let pose = hand_pose(&Point3::new(0.0, 0.0, 0.05), &frame, 0.04);
+        let contacts = [
+            FingerContact {
+                finger: 0,
+                point: 0,
+                position: Point3::new(-0.03, 0.0, 0.05),
+                normal: -Vector3::x(),
+            },
+            FingerContact {
+                finger: 1,
+                point: 1,
+                position: Point3::new(0.03, 0.0, 0.05),
+                normal: Vector3::x(),
+            },
+        ];
+        // At the grasp a point 1 cm outside the right contact is inside the fingertip capsule.
+        let probe = vec![Point3::new(0.04, 0.0, 0.05)];
+        let idx = CloudIndex::new(&probe);
+        let closed = PosedHand::at_grasp(hand, &pose, &contacts, false);
+        assert_eq!(closed.points_inside(&probe, &idx, 0.0, usize::MAX), 1);
+        // Pre-shaped 2 cm open (along the normal tilted toward the palm), the fingertip has moved;
+        // shifted 8 cm up, nothing is near.
+        let open = PosedHand::preshaped(hand, &pose, &contacts, 0.02, Vector3::zeros());
+        let dir = distal_direction(&Vector3::x(), &-Vector3::z());
+        let tip = Point3::new(0.03, 0.0, 0.05) + dir * 0.02 + Vector3::x() * 0.011;
+        let idx_tip = CloudIndex::new(std::slice::from_ref(&tip));
+        assert_eq!(
+            open.points_inside(std::slice::from_ref(&tip), &idx_tip, 0.0, usize::MAX),
+            1
+        );
+        let up = PosedHand::preshaped(hand, &pose, &contacts, 0.02, Vector3::new(0.0, 0.0, 0.08));
+        assert_eq!(
+            up.points_inside(std::slice::from_ref(&tip), &idx_tip, 0.0, usize::MAX),
+            0
+        );
+        let table = Plane::through(&Point3::origin(), Vector3::z());
+        assert!(up.plane_clearance(&table) > closed.plane_clearance(&table));
     }
 }

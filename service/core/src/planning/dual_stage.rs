@@ -36,7 +36,12 @@ impl<'c, 'a> ContactSearch<'c, 'a> {
     /// Stage 2 around the opposition (oc1, oc2): each contact gets its own neighbourhood
     /// Φ(target, λ₂) (Eq 5.6 with p_ref = C_o), the h2 fingers' targets spread along the
     /// opposition's lateral axis `frame_y` at the fingers' spacing.
-    pub fn around(ctx: &'c SearchContext<'a>, oc: (usize, usize), lambda: f64, frame_y: &Vector3<f64>) -> Self {
+    pub fn around(
+        ctx: &'c SearchContext<'a>,
+        oc: (usize, usize),
+        lambda: f64,
+        frame_y: &Vector3<f64>,
+    ) -> Self {
         let k1 = ctx.grasp.h1_count();
         let k2 = ctx.grasp.h2_fingers.len();
         let spacing = finger_spacing(ctx);
@@ -47,7 +52,15 @@ impl<'c, 'a> ContactSearch<'c, 'a> {
             .collect();
         let slots = targets
             .iter()
-            .map(|t| SlotSet::around(ctx.points, ctx.index, t, lambda, ctx.options.contact_candidates))
+            .map(|t| {
+                SlotSet::around(
+                    ctx.points,
+                    ctx.index,
+                    t,
+                    lambda,
+                    ctx.options.contact_candidates,
+                )
+            })
             .collect();
         Self {
             ctx,
@@ -156,15 +169,24 @@ impl<'c, 'a> ContactSearch<'c, 'a> {
             }
             let mut s: Vec<usize> = side.to_vec();
             s.sort_by(|&p, &q| {
-                ctx.points[p].coords.dot(&frame.y).total_cmp(&ctx.points[q].coords.dot(&frame.y))
+                ctx.points[p]
+                    .coords
+                    .dot(&frame.y)
+                    .total_cmp(&ctx.points[q].coords.dot(&frame.y))
             });
             for w in s.windows(2) {
                 let d = (ctx.points[w[1]] - ctx.points[w[0]]).norm();
                 a.violated((0.9 * geo.finger_width - d) / geo.finger_width, || {
-                    format!("two fingers' contacts {:.1} mm apart, closer than a finger width", d * 1e3)
+                    format!(
+                        "two fingers' contacts {:.1} mm apart, closer than a finger width",
+                        d * 1e3
+                    )
                 });
                 a.violated((d - spread) / spread, || {
-                    format!("neighbouring fingers' contacts {:.1} mm apart, beyond the hand's splay", d * 1e3)
+                    format!(
+                        "neighbouring fingers' contacts {:.1} mm apart, beyond the hand's splay",
+                        d * 1e3
+                    )
                 });
             }
         }
@@ -307,12 +329,18 @@ fn default_lambda1(ctx: &SearchContext) -> f64 {
         .iter()
         .map(|p| (p - ctx.p_att).norm())
         .fold(0.0, f64::max);
-    (0.6 * ctx.hand.geometry.max_aperture).min(extent * 1.01).max(0.02)
+    (0.6 * ctx.hand.geometry.max_aperture)
+        .min(extent * 1.01)
+        .max(0.02)
 }
 
 /// Runs stage 1 with bounded widenings of λ₁. Returns the oppositions to try in order (best first)
 /// and whether the best is feasible.
-fn stage_one(ctx: &SearchContext, rng: &mut ChaCha8Rng, stats: &mut StageStats) -> (Vec<Vec<usize>>, bool) {
+fn stage_one(
+    ctx: &SearchContext,
+    rng: &mut ChaCha8Rng,
+    stats: &mut StageStats,
+) -> (Vec<Vec<usize>>, bool) {
     let t = Instant::now();
     let mut lambda = ctx.options.lambda1.unwrap_or_else(|| default_lambda1(ctx));
     let mut fallback: Option<(Vec<usize>, f64)> = None;
@@ -329,8 +357,12 @@ fn stage_one(ctx: &SearchContext, rng: &mut ChaCha8Rng, stats: &mut StageStats) 
             add_run(stats, &run);
             if run.best.is_some() {
                 // Best first, then the earlier improvements as runners-up.
-                let mut list: Vec<Vec<usize>> =
-                    run.improvements.iter().rev().map(|(_, _, c)| c.clone()).collect();
+                let mut list: Vec<Vec<usize>> = run
+                    .improvements
+                    .iter()
+                    .rev()
+                    .map(|(_, _, c)| c.clone())
+                    .collect();
                 list.dedup();
                 list.truncate(4);
                 result = (list, true);
@@ -380,7 +412,11 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
         }
         s2.seconds = t.elapsed().as_secs_f64();
         let (contacts, _, feasible) = best?;
-        let reason = if feasible { None } else { prob.explain(&contacts) };
+        let reason = if feasible {
+            None
+        } else {
+            prob.explain(&contacts)
+        };
         let opposition = (contacts[0], contacts[k1]);
         return Some(SearchOutcome {
             contacts,
@@ -399,7 +435,9 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
     let stage1_reason = if stage1_ok {
         None
     } else {
-        OppositionSearch::new(ctx, 0.0).explain(&first).map(|r| format!("stage 1: {r}"))
+        OppositionSearch::new(ctx, 0.0)
+            .explain(&first)
+            .map(|r| format!("stage 1: {r}"))
     };
     if m == 2 {
         // Two contacts: the pregrasping opposition is the final grasp (as for the P-Grip).
@@ -436,7 +474,9 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
             if prob.has_empty_slot() {
                 continue;
             }
-            s2.candidates = s2.candidates.max(prob.slots.iter().map(SlotSet::len).max().unwrap_or(0));
+            s2.candidates = s2
+                .candidates
+                .max(prob.slots.iter().map(SlotSet::len).max().unwrap_or(0));
             s2.solution_space = s2.solution_space.max(prob.solution_space());
             let init = prob.initial_at_targets();
             let sched = budget(ctx, prob.solution_space());

@@ -311,7 +311,10 @@ mod tests {
             patch_radius: 0.01,
         };
         let com = Point3::origin();
-        let pair = [c([0.03, 0.0, 0.0], [1.0, 0.0, 0.0]), c([-0.03, 0.0, 0.0], [-1.0, 0.0, 0.0])];
+        let pair = [
+            c([0.03, 0.0, 0.0], [1.0, 0.0, 0.0]),
+            c([-0.03, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+        ];
         let w = primitive_wrenches(&pair, &com, 0.04, model);
         let (fast, exact) = (epsilon_of_wrenches(&w), brute_force(&w));
         assert!(exact > 0.0);
@@ -320,19 +323,28 @@ mod tests {
         let tri: Vec<ContactPoint> = (0..3)
             .map(|i| {
                 let th = 2.0 * std::f64::consts::PI * i as f64 / 3.0 + 0.3;
-                c([0.04 * th.cos(), 0.04 * th.sin(), 0.005], [th.cos(), th.sin(), 0.1])
+                c(
+                    [0.04 * th.cos(), 0.04 * th.sin(), 0.005],
+                    [th.cos(), th.sin(), 0.1],
+                )
             })
             .collect();
         let w = primitive_wrenches(&tri, &com, 0.04, WrenchModel { edges: 3, ..model });
         let (fast, exact) = (epsilon_of_wrenches(&w), brute_force(&w));
         assert!(exact > 0.0);
-        assert!((fast - exact).abs() < 1e-6 * exact.max(1.0), "fast {fast} exact {exact}");
+        assert!(
+            (fast - exact).abs() < 1e-6 * exact.max(1.0),
+            "fast {fast} exact {exact}"
+        );
     }
 
     #[test]
     fn no_force_closure_gives_zero() {
         // Both contacts push the same way: the origin is outside the hull.
-        let same = [c([0.03, 0.0, 0.0], [1.0, 0.0, 0.0]), c([0.03, 0.02, 0.0], [1.0, 0.0, 0.0])];
+        let same = [
+            c([0.03, 0.0, 0.0], [1.0, 0.0, 0.0]),
+            c([0.03, 0.02, 0.0], [1.0, 0.0, 0.0]),
+        ];
         assert_eq!(
             ferrari_canny(&same, &Point3::origin(), 0.04, WrenchModel::default()),
             0.0
@@ -343,9 +355,18 @@ mod tests {
     fn centred_antipodal_grasp_beats_an_off_centre_one() {
         let m = WrenchModel::default();
         let com = Point3::origin();
-        let centred = [c([0.03, 0.0, 0.0], [1.0, 0.0, 0.0]), c([-0.03, 0.0, 0.0], [-1.0, 0.0, 0.0])];
-        let off = [c([0.03, 0.0, 0.05], [1.0, 0.0, 0.0]), c([-0.03, 0.0, 0.05], [-1.0, 0.0, 0.0])];
-        let (a, b) = (ferrari_canny(&centred, &com, 0.08, m), ferrari_canny(&off, &com, 0.08, m));
+        let centred = [
+            c([0.03, 0.0, 0.0], [1.0, 0.0, 0.0]),
+            c([-0.03, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+        ];
+        let off = [
+            c([0.03, 0.0, 0.05], [1.0, 0.0, 0.0]),
+            c([-0.03, 0.0, 0.05], [-1.0, 0.0, 0.0]),
+        ];
+        let (a, b) = (
+            ferrari_canny(&centred, &com, 0.08, m),
+            ferrari_canny(&off, &com, 0.08, m),
+        );
         assert!(a > b && b > 0.0, "centred {a} off {b}");
     }
 }

@@ -47,7 +47,11 @@ pub fn palm_frame(palm_to_fingers: &Vector3<f64>, object_axis: &Vector3<f64>) ->
     let z = palm_to_fingers.try_normalize(1e-12)?;
     let mut y = object_axis - z * object_axis.dot(&z);
     if y.norm() < 0.2 {
-        let other = if z.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+        let other = if z.x.abs() < 0.9 {
+            Vector3::x()
+        } else {
+            Vector3::y()
+        };
         y = other - z * other.dot(&z);
     }
     let y = y.normalize();
@@ -86,7 +90,11 @@ mod tests {
 
     #[test]
     fn finger_frame_is_right_handed_and_follows_preferences() {
-        let f = finger_frame(&Vector3::new(2.0, 0.0, 0.0), &[Vector3::new(0.0, 0.1, -1.0)]).unwrap();
+        let f = finger_frame(
+            &Vector3::new(2.0, 0.0, 0.0),
+            &[Vector3::new(0.0, 0.1, -1.0)],
+        )
+        .unwrap();
         assert!((f.x - Vector3::x()).norm() < 1e-12);
         assert!(f.z.z < -0.99);
         assert!((f.x.cross(&f.y) - f.z).norm() < 1e-12);

@@ -33,10 +33,12 @@ impl ObjectShape {
         let mut axes = [vecs[2], vecs[1], vecs[0]];
         axes[2] = axes[0].cross(&axes[1]);
         let mut extents = axes.map(|a| {
-            let (lo, hi) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
-                let v = (p - center).dot(&a);
-                (l.min(v), h.max(v))
-            });
+            let (lo, hi) = points
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                    let v = (p - center).dot(&a);
+                    (l.min(v), h.max(v))
+                });
             hi - lo
         });
         // PCA order and extent order can differ for boxes; keep d1 ≥ d2 ≥ d3.

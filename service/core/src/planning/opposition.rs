@@ -27,7 +27,13 @@ pub struct OppositionSearch<'c, 'a> {
 impl<'c, 'a> OppositionSearch<'c, 'a> {
     /// Φ(p_att) with radius `lambda` (Eq 5.6), thinned to `opposition_candidates` points.
     pub fn new(ctx: &'c SearchContext<'a>, lambda: f64) -> Self {
-        let set = SlotSet::around(ctx.points, ctx.index, &ctx.p_att, lambda, ctx.options.opposition_candidates);
+        let set = SlotSet::around(
+            ctx.points,
+            ctx.index,
+            &ctx.p_att,
+            lambda,
+            ctx.options.opposition_candidates,
+        );
         Self {
             ctx,
             set,
@@ -59,10 +65,16 @@ impl<'c, 'a> OppositionSearch<'c, 'a> {
         let d = (ctx.points[j] - ctx.points[i]).normalize();
         let (ci, cj) = (-ni.dot(&d), nj.dot(&d));
         a.violated(ctx.cos_friction - ci, || {
-            format!("the line oc1–oc2 leaves oc1's friction cone (μ = {})", ctx.options.friction)
+            format!(
+                "the line oc1–oc2 leaves oc1's friction cone (μ = {})",
+                ctx.options.friction
+            )
         });
         a.violated(ctx.cos_friction - cj, || {
-            format!("the line oc1–oc2 leaves oc2's friction cone (μ = {})", ctx.options.friction)
+            format!(
+                "the line oc1–oc2 leaves oc2's friction cone (μ = {})",
+                ctx.options.friction
+            )
         });
         a
     }
@@ -99,7 +111,8 @@ impl<'c, 'a> OppositionSearch<'c, 'a> {
                 best = Some((s.merit, vec![i, j]));
             }
         }
-        best.map(|b| b.1).unwrap_or_else(|| vec![cands[0], cands[n - 1]])
+        best.map(|b| b.1)
+            .unwrap_or_else(|| vec![cands[0], cands[n - 1]])
     }
 
     /// Why a configuration is infeasible (None when it is feasible).

@@ -50,7 +50,10 @@ impl PlannerOptions {
         check_range("epsilon", self.epsilon, 0.0, 1.0)?;
         check_range("friction", self.friction, 0.01, 5.0)?;
         check_range("torsion_gamma", self.torsion_gamma, 0.0, 10.0)?;
-        for (name, w) in [("stage1_weights", self.stage1_weights), ("stage2_weights", self.stage2_weights)] {
+        for (name, w) in [
+            ("stage1_weights", self.stage1_weights),
+            ("stage2_weights", self.stage2_weights),
+        ] {
             for v in w {
                 check_range(name, v, -100.0, 100.0)?;
             }
@@ -67,11 +70,21 @@ impl PlannerOptions {
             }
         };
         usize_range("max_iterations", self.max_iterations, 1, 10_000_000)?;
-        usize_range("min_iterations", self.min_iterations, 0, self.max_iterations)?;
+        usize_range(
+            "min_iterations",
+            self.min_iterations,
+            0,
+            self.max_iterations,
+        )?;
         usize_range("patience", self.patience, 1, 10_000_000)?;
         usize_range("restarts", self.restarts, 0, 10)?;
         usize_range("normals_k", self.normals_k, 3, 100)?;
-        usize_range("opposition_candidates", self.opposition_candidates, 8, 100_000)?;
+        usize_range(
+            "opposition_candidates",
+            self.opposition_candidates,
+            8,
+            100_000,
+        )?;
         usize_range("contact_candidates", self.contact_candidates, 2, 100_000)?;
         usize_range("friction_cone_edges", self.friction_cone_edges, 3, 64)?;
         if let Some(l) = self.lambda1 {
@@ -96,24 +109,44 @@ struct Scene {
     original: Vec<usize>,
 }
 
-fn separate_support_plane(cloud: &PointCloud, hints: &PlanHints, options: &PlannerOptions) -> Result<Scene, FieldError> {
-    let (plane, source, keep): (Option<Plane>, PlaneSource, Vec<bool>) = if let Some(pl) = hints.support_plane {
-        let keep = cloud.points.iter().map(|p| pl.distance(p) >= PLANE_BAND).collect();
-        (Some(pl), PlaneSource::Request, keep)
-    } else if let Some(fit) = options
-        .detect_support_plane
-        .then(|| detect_support_plane(&cloud.points, RansacParams::default(), options.seed, MIN_POINTS))
-        .flatten()
-    {
-        let keep = fit.removed.iter().map(|r| !r).collect();
-        (Some(fit.plane), PlaneSource::Detected, keep)
-    } else {
-        (None, PlaneSource::None, vec![true; cloud.points.len()])
-    };
+fn separate_support_plane(
+    cloud: &PointCloud,
+    hints: &PlanHints,
+    options: &PlannerOptions,
+) -> Result<Scene, FieldError> {
+    let (plane, source, keep): (Option<Plane>, PlaneSource, Vec<bool>) =
+        if let Some(pl) = hints.support_plane {
+            let keep = cloud
+                .points
+                .iter()
+                .map(|p| pl.distance(p) >= PLANE_BAND)
+                .collect();
+            (Some(pl), PlaneSource::Request, keep)
+        } else if let Some(fit) = options
+            .detect_support_plane
+            .then(|| {
+                detect_support_plane(
+                    &cloud.points,
+                    RansacParams::default(),
+                    options.seed,
+                    MIN_POINTS,
+                )
+            })
+            .flatten()
+        {
+            let keep = fit.removed.iter().map(|r| !r).collect();
+            (Some(fit.plane), PlaneSource::Detected, keep)
+        } else {
+            (None, PlaneSource::None, vec![true; cloud.points.len()])
+        };
     let original: Vec<usize> = (0..cloud.points.len()).filter(|&i| keep[i]).collect();
     if original.len() < MIN_POINTS {
         return Err(FieldError::new(
-            if source == PlaneSource::Request { "hints.support_plane" } else { "cloud" },
+            if source == PlaneSource::Request {
+                "hints.support_plane"
+            } else {
+                "cloud"
+            },
             format!(
                 "only {} of {} points lie above the support plane; the planner needs at least {MIN_POINTS} object points",
                 original.len(),
@@ -125,7 +158,10 @@ fn separate_support_plane(cloud: &PointCloud, hints: &PlanHints, options: &Plann
         plane,
         source,
         points: original.iter().map(|&i| cloud.points[i]).collect(),
-        normals: cloud.normals.as_ref().map(|n| original.iter().map(|&i| n[i]).collect()),
+        normals: cloud
+            .normals
+            .as_ref()
+            .map(|n| original.iter().map(|&i| n[i]).collect()),
         original,
     })
 }
@@ -145,9 +181,14 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
 
     let scene = separate_support_plane(&cloud, &hints, &options)?;
     if scene.source == PlaneSource::None {
-        warnings.push("no support plane given or found: the hand is not checked against a table".into());
+        warnings.push(
+            "no support plane given or found: the hand is not checked against a table".into(),
+        );
     }
-    let up = scene.plane.map(|p| p.normal).or(hints.up.and_then(|u| u.try_normalize(1e-9)));
+    let up = scene
+        .plane
+        .map(|p| p.normal)
+        .or(hints.up.and_then(|u| u.try_normalize(1e-9)));
     let points = &scene.points;
     let t_pre = t_start.elapsed().as_secs_f64();
 
@@ -157,14 +198,23 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         Some(v) => Orientation::TowardViewpoint(v),
         None => Orientation::AwayFromCentroid,
     };
-    let normals = LazyNormals::new(points, &index, options.normals_k, orient, scene.normals.clone());
+    let normals = LazyNormals::new(
+        points,
+        &index,
+        options.normals_k,
+        orient,
+        scene.normals.clone(),
+    );
     let t_normals = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let shape = ObjectShape::of(points);
     let (requested, type_source) = match hints.grasp_type {
         Some(t) => (t, TypeSource::Request),
-        None => (type_rule::grasp_type_by_rule(&shape), TypeSource::GeometricRule),
+        None => (
+            type_rule::grasp_type_by_rule(&shape),
+            TypeSource::GeometricRule,
+        ),
     };
     let grasp = if type_source == TypeSource::Request {
         hand.resolve_forced(requested).ok_or_else(|| {
@@ -173,7 +223,11 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
                 format!(
                     "hand '{}' cannot realise {requested} (it realises: {})",
                     hand.name,
-                    hand.realisable_types().iter().map(|t| t.name()).collect::<Vec<_>>().join(", ")
+                    hand.realisable_types()
+                        .iter()
+                        .map(|t| t.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
             )
         })?
@@ -186,7 +240,13 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
             grasp.grasp_type, hand.name
         ));
     }
-    let rule_approach = type_rule::approach_by_rule(&shape, grasp.grasp_type, points, up.as_ref(), hints.viewpoint.as_ref());
+    let rule_approach = type_rule::approach_by_rule(
+        &shape,
+        grasp.grasp_type,
+        points,
+        up.as_ref(),
+        hints.viewpoint.as_ref(),
+    );
     let att = match hints.attention_point {
         Some(p) => {
             let (i, d) = index.nearest_one(&p);
@@ -257,12 +317,20 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
 
 /// Builds the response from the search outcome: contacts with fingers, poses, quality figures and
 /// the collision report.
-fn assemble(ctx: &SearchContext, out: &SearchOutcome, scene: &Scene, options: &PlannerOptions) -> Result<GraspPlan, PlanError> {
+fn assemble(
+    ctx: &SearchContext,
+    out: &SearchOutcome,
+    scene: &Scene,
+    options: &PlannerOptions,
+) -> Result<GraspPlan, PlanError> {
     let (h1, h2) = out.contacts.split_at(out.k1);
     let assessment = ctx.assess(h1, h2, out.final_weights);
-    let (hand_pose, pregrasp_pose, frame) = ctx
-        .poses(&assessment)
-        .ok_or_else(|| FieldError::new("cloud", "the planned contacts coincide; no hand pose exists"))?;
+    let (hand_pose, pregrasp_pose, frame) = ctx.poses(&assessment).ok_or_else(|| {
+        FieldError::new(
+            "cloud",
+            "the planned contacts coincide; no hand pose exists",
+        )
+    })?;
     let s = ctx.stability(&out.contacts);
     let mut contacts = Vec::with_capacity(out.contacts.len());
     if ctx.palm_opposition() {
@@ -277,7 +345,11 @@ fn assemble(ctx: &SearchContext, out: &SearchOutcome, scene: &Scene, options: &P
     }
     for fc in ctx.finger_contacts(h1, h2, &frame) {
         let finger = &ctx.hand.fingers[fc.finger];
-        let part = if finger.thumb { ctx.grasp.h1_part } else { ctx.grasp.h2_part };
+        let part = if finger.thumb {
+            ctx.grasp.h1_part
+        } else {
+            ctx.grasp.h2_part
+        };
         contacts.push(Contact {
             position: fc.position,
             normal: fc.normal,

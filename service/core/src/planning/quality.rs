@@ -182,14 +182,20 @@ mod tests {
     #[test]
     fn gii_two_antipodal_soft_contacts_equals_gamma() {
         // Hand computation (method.md §3): G·Gᵀ = diag(2, 2, 2, 2γ², 2, 2), so S = γ for γ ≤ 1.
-        let pair = [c([0.03, 0.0, 0.0], [1.0, 0.0, 0.0]), c([-0.03, 0.0, 0.0], [-1.0, 0.0, 0.0])];
+        let pair = [
+            c([0.03, 0.0, 0.0], [1.0, 0.0, 0.0]),
+            c([-0.03, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+        ];
         assert_relative_eq!(gii(&pair, 1.0), 1.0, epsilon = 1e-12);
         assert_relative_eq!(gii(&pair, 0.3), 0.3, epsilon = 1e-12);
         let ggt = soft_finger_ggt(&pair, 0.5).unwrap();
         let expect = Matrix6::from_diagonal(&Vector6::new(2.0, 2.0, 2.0, 0.5, 2.0, 2.0));
         assert_relative_eq!(ggt, expect, epsilon = 1e-12);
         // The scale of the object does not matter (spread-normalised moments).
-        let big = [c([0.3, 0.0, 0.0], [1.0, 0.0, 0.0]), c([-0.3, 0.0, 0.0], [-1.0, 0.0, 0.0])];
+        let big = [
+            c([0.3, 0.0, 0.0], [1.0, 0.0, 0.0]),
+            c([-0.3, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+        ];
         assert_relative_eq!(gii(&big, 1.0), 1.0, epsilon = 1e-12);
     }
 
@@ -221,7 +227,10 @@ mod tests {
     fn gii_same_side_contacts_are_unstable() {
         // Two contacts on one face with parallel normals cannot resist a moment about the axis
         // through them along the face: σ_min = 0.
-        let pts = [c([0.0, 0.02, 0.0], [1.0, 0.0, 0.0]), c([0.0, -0.02, 0.0], [1.0, 0.0, 0.0])];
+        let pts = [
+            c([0.0, 0.02, 0.0], [1.0, 0.0, 0.0]),
+            c([0.0, -0.02, 0.0], [1.0, 0.0, 0.0]),
+        ];
         assert!(gii(&pts, 1.0) < 1e-9);
         assert_eq!(gii(&[pts[0], pts[0]], 1.0), 0.0);
     }
@@ -252,7 +261,11 @@ mod tests {
         let d = Vector3::new(FRAC_PI_3.sin(), 0.0, FRAC_PI_3.cos());
         assert_relative_eq!(attention(&n, &d), -PI / 6.0, epsilon = 1e-12);
         assert_relative_eq!(attention_palm(&n, &-Vector3::z()), 0.0, epsilon = 1e-12);
-        assert_relative_eq!(attention_palm(&n, &Vector3::x()), -FRAC_PI_2, epsilon = 1e-12);
+        assert_relative_eq!(
+            attention_palm(&n, &Vector3::x()),
+            -FRAC_PI_2,
+            epsilon = 1e-12
+        );
     }
 
     #[test]

@@ -6,7 +6,7 @@ use super::collision::{self, FingerContact, PosedHand};
 use super::hand_pose::{self, HandFrame, finger_frame, palm_frame};
 use super::object_shape::ObjectShape;
 use super::quality::{self, ContactPoint};
-use super::types::{Pose, PlannerOptions};
+use super::types::{PlannerOptions, Pose};
 use crate::cloud::{CloudIndex, LazyNormals, Plane};
 use crate::grasp_type::HandPart;
 use crate::hand::{HandDescription, ResolvedGrasp};
@@ -83,7 +83,11 @@ impl SearchContext<'_> {
     /// and the grasp-polygon area for more.
     pub fn assess(&self, h1: &[usize], h2: &[usize], weights: [f64; 2]) -> Assessment {
         let mean = |idx: &[usize]| {
-            Point3::from(idx.iter().fold(Vector3::zeros(), |a, &i| a + self.points[i].coords) / idx.len() as f64)
+            Point3::from(
+                idx.iter()
+                    .fold(Vector3::zeros(), |a, &i| a + self.points[i].coords)
+                    / idx.len() as f64,
+            )
         };
         let (c1, c2) = (mean(h1), mean(h2));
         let all: Vec<usize> = h1.iter().chain(h2).copied().collect();
@@ -112,10 +116,18 @@ impl SearchContext<'_> {
             }
         }
         out.violated((open_max - geo.max_aperture) / geo.max_aperture, || {
-            format!("opening {:.1} mm exceeds a_max {:.1} mm", open_max * 1e3, geo.max_aperture * 1e3)
+            format!(
+                "opening {:.1} mm exceeds a_max {:.1} mm",
+                open_max * 1e3,
+                geo.max_aperture * 1e3
+            )
         });
         out.violated((geo.min_aperture - open_min) / geo.max_aperture, || {
-            format!("opening {:.1} mm below the hand's minimum {:.1} mm", open_min * 1e3, geo.min_aperture * 1e3)
+            format!(
+                "opening {:.1} mm below the hand's minimum {:.1} mm",
+                open_min * 1e3,
+                geo.min_aperture * 1e3
+            )
         });
         let frame = if self.palm_opposition() {
             palm_frame(&d, &self.shape.axes[0])
@@ -181,13 +193,25 @@ impl SearchContext<'_> {
 
     /// The contacts assigned to fingers: h2 contacts in order of their lateral coordinate go to
     /// the h2 fingers in order of their bases' y (likewise h1); a palm contact gets no finger.
-    pub fn finger_contacts(&self, h1: &[usize], h2: &[usize], frame: &HandFrame) -> Vec<FingerContact> {
+    pub fn finger_contacts(
+        &self,
+        h1: &[usize],
+        h2: &[usize],
+        frame: &HandFrame,
+    ) -> Vec<FingerContact> {
         let mut out = Vec::with_capacity(h1.len() + h2.len());
         let mut assign = |idx: &[usize], fingers: &[usize]| {
             let mut pts: Vec<usize> = idx.to_vec();
-            pts.sort_by(|&a, &b| self.points[a].coords.dot(&frame.y).total_cmp(&self.points[b].coords.dot(&frame.y)));
+            pts.sort_by(|&a, &b| {
+                self.points[a]
+                    .coords
+                    .dot(&frame.y)
+                    .total_cmp(&self.points[b].coords.dot(&frame.y))
+            });
             let mut fs: Vec<usize> = fingers.to_vec();
-            fs.sort_by(|&a, &b| self.hand.fingers[a].base[1].total_cmp(&self.hand.fingers[b].base[1]));
+            fs.sort_by(|&a, &b| {
+                self.hand.fingers[a].base[1].total_cmp(&self.hand.fingers[b].base[1])
+            });
             for (p, f) in pts.iter().zip(fs) {
                 out.push(FingerContact {
                     finger: f,
@@ -212,19 +236,16 @@ impl SearchContext<'_> {
         Some((pose, pre, frame))
     }
 
-    /// The hand posed at the grasp, at the pre-grasp and halfway along the approach (open).
+    /// The hand posed at the grasp, and pre-shaped (fingers 2 cm open) at the pre-grasp and
+    /// halfway along the approach.
     fn posed(&self, h1: &[usize], h2: &[usize], a: &Assessment) -> Option<[PosedHand; 3]> {
         let (pose, pre, frame) = self.poses(a)?;
         let fingers = self.finger_contacts(h1, h2, &frame);
-        let used: Vec<usize> = fingers.iter().map(|f| f.finger).collect();
-        let mid = Pose {
-            position: Point3::from((pose.position.coords + pre.position.coords) / 2.0),
-            orientation: pose.orientation,
-        };
+        let back = pre.position - pose.position;
         Some([
             PosedHand::at_grasp(self.hand, &pose, &fingers, self.palm_opposition()),
-            PosedHand::open(self.hand, &pre, &used),
-            PosedHand::open(self.hand, &mid, &used),
+            PosedHand::preshaped(self.hand, &pose, &fingers, PRESHAPE_OPENING, back),
+            PosedHand::preshaped(self.hand, &pose, &fingers, PRESHAPE_OPENING, back / 2.0),
         ])
     }
 
@@ -234,7 +255,10 @@ impl SearchContext<'_> {
             return true;
         };
         if let Some(pl) = self.plane {
-            if hands.iter().any(|h| h.plane_clearance(&pl) < -PLANE_TOLERANCE) {
+            if hands
+                .iter()
+                .any(|h| h.plane_clearance(&pl) < -PLANE_TOLERANCE)
+            {
                 return true;
             }
         }
@@ -245,11 +269,26 @@ impl SearchContext<'_> {
     }
 
     /// Collision counts of the posed hand for the report.
-    pub fn collisions(&self, h1: &[usize], h2: &[usize], a: &Assessment) -> Option<CollisionCounts> {
+    pub fn collisions(
+        &self,
+        h1: &[usize],
+        h2: &[usize],
+        a: &Assessment,
+    ) -> Option<CollisionCounts> {
         let hands = self.posed(h1, h2, a)?;
-        let count = |h: &PosedHand| h.points_inside(self.points, self.index, collision::DEFAULT_TOLERANCE, usize::MAX);
+        let count = |h: &PosedHand| {
+            h.points_inside(
+                self.points,
+                self.index,
+                collision::DEFAULT_TOLERANCE,
+                usize::MAX,
+            )
+        };
         let plane_clearance = self.plane.map(|pl| {
-            hands.iter().map(|h| h.plane_clearance(&pl)).fold(f64::INFINITY, f64::min)
+            hands
+                .iter()
+                .map(|h| h.plane_clearance(&pl))
+                .fold(f64::INFINITY, f64::min)
         });
         Some(CollisionCounts {
             final_points: count(&hands[0]),
@@ -259,6 +298,9 @@ impl SearchContext<'_> {
         })
     }
 }
+
+/// How far each fingertip stands off its contact while the hand approaches, m.
+pub const PRESHAPE_OPENING: f64 = 0.02;
 
 /// How far the hand may reach below the support plane (contact with the table surface), m.
 pub const PLANE_TOLERANCE: f64 = 0.001;
@@ -286,7 +328,10 @@ impl CollisionCounts {
     pub fn describe(&self) -> String {
         let mut parts = Vec::new();
         if let Some(c) = self.plane_clearance.filter(|c| *c < -PLANE_TOLERANCE) {
-            parts.push(format!("hand reaches {:.1} mm below the support plane", -c * 1e3));
+            parts.push(format!(
+                "hand reaches {:.1} mm below the support plane",
+                -c * 1e3
+            ));
         }
         let n = collision::DEFAULT_MIN_POINTS;
         for (what, k) in [

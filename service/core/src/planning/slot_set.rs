@@ -22,7 +22,13 @@ const K: usize = 8;
 
 impl SlotSet {
     /// Φ(center, radius) thinned to at most `max` points (see [`spread_subset`]).
-    pub fn around(points: &[Point3<f64>], index: &CloudIndex, center: &Point3<f64>, radius: f64, max: usize) -> Self {
+    pub fn around(
+        points: &[Point3<f64>],
+        index: &CloudIndex,
+        center: &Point3<f64>,
+        radius: f64,
+        max: usize,
+    ) -> Self {
         let near = index.within(center, radius);
         Self::of(points, spread_subset(points, &near, max))
     }
@@ -102,8 +108,14 @@ pub fn spread_subset(points: &[Point3<f64>], indices: &[usize], max: usize) -> V
         let mut cells: HashMap<[i64; 3], (nalgebra::Vector3<f64>, Vec<usize>)> = HashMap::new();
         for &i in indices {
             let p = points[i] - lo;
-            let key = [(p.x / cell) as i64, (p.y / cell) as i64, (p.z / cell) as i64];
-            let e = cells.entry(key).or_insert((nalgebra::Vector3::zeros(), Vec::new()));
+            let key = [
+                (p.x / cell) as i64,
+                (p.y / cell) as i64,
+                (p.z / cell) as i64,
+            ];
+            let e = cells
+                .entry(key)
+                .or_insert((nalgebra::Vector3::zeros(), Vec::new()));
             e.0 += points[i].coords;
             e.1.push(i);
         }
@@ -146,13 +158,23 @@ mod tests {
         // Spread: every point of the grid has a chosen point within 1.5 cells' diagonal.
         let worst = pts
             .iter()
-            .map(|p| s.iter().map(|&j| (pts[j] - p).norm()).fold(f64::INFINITY, f64::min))
+            .map(|p| {
+                s.iter()
+                    .map(|&j| (pts[j] - p).norm())
+                    .fold(f64::INFINITY, f64::min)
+            })
             .fold(0.0, f64::max);
         assert!(worst < 0.02, "{worst}");
         let set = SlotSet::of(&pts, s.clone());
         assert!(set.contains(s[0]) && !set.contains(usize::MAX));
         let idx = CloudIndex::new(&pts);
-        let lazy = LazyNormals::new(&pts, &idx, 8, crate::cloud::Orientation::AwayFromCentroid, None);
+        let lazy = LazyNormals::new(
+            &pts,
+            &idx,
+            8,
+            crate::cloud::Orientation::AwayFromCentroid,
+            None,
+        );
         assert_eq!(set.neighbours(s[0], &lazy).len(), 8);
     }
 }

@@ -75,7 +75,9 @@ pub fn approach_by_rule(
     let height = points
         .iter()
         .map(|p| p.coords.dot(up))
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(v), h.max(v))
+        });
     let height = height.1 - height.0;
     let fingertip = matches!(
         grasp_type,
@@ -138,7 +140,11 @@ mod tests {
                 for k in 0..=n {
                     if [i, j, k].iter().any(|&q| q == 0 || q == n) {
                         let f = |q: usize, s: f64| s * q as f64 / n as f64;
-                        v.push(Point3::new(f(i, sx) - sx / 2.0, f(j, sy) - sy / 2.0, f(k, sz)));
+                        v.push(Point3::new(
+                            f(i, sx) - sx / 2.0,
+                            f(j, sy) - sy / 2.0,
+                            f(k, sz),
+                        ));
                     }
                 }
             }
@@ -152,7 +158,11 @@ mod tests {
         for i in 0..48 {
             let th = 2.0 * std::f64::consts::PI * i as f64 / 48.0;
             for k in 0..=20 {
-                v.push(Point3::new(d / 2.0 * th.cos(), d / 2.0 * th.sin(), h * k as f64 / 20.0));
+                v.push(Point3::new(
+                    d / 2.0 * th.cos(),
+                    d / 2.0 * th.sin(),
+                    h * k as f64 / 20.0,
+                ));
             }
             for r in 1..6 {
                 let rr = d / 2.0 * r as f64 / 6.0;
@@ -185,9 +195,16 @@ mod tests {
         let up = Vector3::z();
         let view = Point3::new(0.5, 0.0, 0.4);
         let a = approach_by_rule(&shape, GraspType::LargeWrap, &pts, Some(&up), Some(&view));
-        assert!(a.z.abs() < 1e-9 && a.x < -0.99, "side approach from the viewpoint: {a:?}");
+        assert!(
+            a.z.abs() < 1e-9 && a.x < -0.99,
+            "side approach from the viewpoint: {a:?}"
+        );
         let i = attention_point_by_rule(&shape, &pts, &a);
-        assert!(pts[i].x > 0.03, "on the side facing the camera: {:?}", pts[i]);
+        assert!(
+            pts[i].x > 0.03,
+            "on the side facing the camera: {:?}",
+            pts[i]
+        );
         let top = approach_by_rule(&shape, GraspType::Tripod, &pts, Some(&up), Some(&view));
         assert!((top + up).norm() < 1e-12);
         let j = attention_point_by_rule(&shape, &pts, &top);

@@ -84,7 +84,7 @@ impl Default for PlannerOptions {
             restarts: 2,
             lambda1: None,
             lambda2: None,
-            opposition_candidates: 96,
+            opposition_candidates: 128,
             contact_candidates: 16,
             normals_k: 16,
             pregrasp_distance: 0.08,
