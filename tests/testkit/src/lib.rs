@@ -1,1 +1,56 @@
+//! Realistic point clouds of the YCB test objects for graspd's tests, benchmarks and examples.
+//!
+//! - [`ycb`]: the 13 objects in `<workspace>/../shared/testdata/objects/ycb` (or
+//!   `$GRASPD_TESTDATA/objects/ycb`) and their meshes as parry [`TriMesh`]es, in metres, z up,
+//!   standing on the table plane z = 0 (origin not centred: see the objects README).
+//! - [`render`]: a pinhole depth sensor that ray-casts a mesh (and optionally a finite table
+//!   patch at z = 0) and returns a single-view cloud in the world frame.
+//! - [`sample`]: seeded downsampling and whole-surface sampling with outward normals.
+//! - [`view`]: [`standard_view`], the one call most tests use.
+//!
+//! ```no_run
+//! use graspd_testkit::{standard_view, ycb::Object};
+//! let v = standard_view(Object::TomatoSoupCan, 2000, 1);
+//! assert_eq!(v.cloud.len(), 2000);
+//! ```
 
+pub mod render;
+pub mod sample;
+pub mod view;
+pub mod ycb;
+
+pub use parry3d_f64::shape::TriMesh;
+pub use render::{Camera, Intrinsics, RenderedView, TablePatch, render_view};
+pub use sample::{downsample_indices, downsample_to, sample_surface};
+pub use view::{ViewCloud, ViewSpec, standard_view, view};
+pub use ycb::{Object, load_mesh, mesh};
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// Errors of the testkit (missing test data, unreadable meshes).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TestkitError(pub String);
+
+impl fmt::Display for TestkitError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for TestkitError {}
+
+pub type Result<T> = std::result::Result<T, TestkitError>;
+
+/// The workspace root (`tests/testkit/../..`).
+pub fn workspace_root() -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+}
+
+/// The shared test data: `$GRASPD_TESTDATA` if set, else `<workspace>/../shared/testdata`.
+pub fn testdata_dir() -> PathBuf {
+    match std::env::var_os("GRASPD_TESTDATA") {
+        Some(dir) if !dir.is_empty() => PathBuf::from(dir),
+        _ => workspace_root().join("../shared/testdata"),
+    }
+}
