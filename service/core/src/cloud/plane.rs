@@ -219,7 +219,7 @@ mod tests {
         // The side face's lowest row lies in the 4 mm inlier band and pulls the fit slightly.
         assert!(fit.plane.offset.abs() < 1e-3);
         let kept = fit.removed.iter().filter(|r| !**r).count();
-        assert!(kept >= 144 && kept <= 288, "kept {kept}");
+        assert!((144..=288).contains(&kept), "kept {kept}");
     }
 
     #[test]

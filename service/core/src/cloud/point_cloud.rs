@@ -125,7 +125,7 @@ pub fn decode_packed_xyz(bytes: &[u8], field: &str) -> Result<Vec<Point3<f64>>, 
 
 /// Decodes packed little-endian float32 triples as vectors (used for normals).
 pub fn decode_packed_vec3(bytes: &[u8], field: &str) -> Result<Vec<Vector3<f64>>, FieldError> {
-    if bytes.len() % 12 != 0 {
+    if !bytes.len().is_multiple_of(12) {
         return Err(FieldError::new(
             field,
             format!(

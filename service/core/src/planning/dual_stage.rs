@@ -284,6 +284,13 @@ impl SearchProblem for ContactSearch<'_, '_> {
     }
 }
 
+/// A stage-2 run's configuration with the opposition it started from.
+struct Stage2Result {
+    contacts: Vec<usize>,
+    opposition: (usize, usize),
+    frame_y: Vector3<f64>,
+}
+
 /// The result of the whole search.
 #[derive(Debug, Clone)]
 pub struct SearchOutcome {
@@ -457,8 +464,9 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
         .options
         .lambda2
         .unwrap_or_else(|| ctx.hand.geometry.finger_width.max(0.015));
-    let mut fallback: Option<(Vec<usize>, f64, (usize, usize), Vector3<f64>)> = None;
-    let mut found: Option<(Vec<usize>, (usize, usize), Vector3<f64>)> = None;
+    // (contacts, merit, opposition, lateral axis) of the best run, feasible or not.
+    let mut fallback: Option<(Stage2Result, f64)> = None;
+    let mut found: Option<Stage2Result> = None;
     'outer: for oc in &oppositions {
         let oc = (oc[0], oc[1]);
         let frame_y = OppositionSearch::new(ctx, 0.0)
@@ -483,22 +491,37 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
             let run = anneal(&mut prob, init, sched, rng);
             add_run(&mut s2, &run);
             if let Some((c, _)) = run.best {
-                found = Some((c, oc, frame_y));
+                found = Some(Stage2Result {
+                    contacts: c,
+                    opposition: oc,
+                    frame_y,
+                });
                 break 'outer;
             }
             if fallback.as_ref().is_none_or(|f| run.best_any.1 > f.1) {
-                fallback = Some((run.best_any.0.clone(), run.best_any.1, oc, frame_y));
+                fallback = Some((
+                    Stage2Result {
+                        contacts: run.best_any.0.clone(),
+                        opposition: oc,
+                        frame_y,
+                    },
+                    run.best_any.1,
+                ));
             }
         }
     }
     s2.seconds = t.elapsed().as_secs_f64();
-    let (contacts, oc, frame_y, feasible) = match found {
-        // A final grasp that meets every constraint is feasible even if stage 1 had to fall back.
-        Some((c, oc, y)) => (c, oc, y, true),
-        None => {
-            let (c, _, oc, y) = fallback?;
-            (c, oc, y, false)
-        }
+    // A final grasp that meets every constraint is feasible even if stage 1 had to fall back.
+    let (
+        Stage2Result {
+            contacts,
+            opposition: oc,
+            frame_y,
+        },
+        feasible,
+    ) = match found {
+        Some(r) => (r, true),
+        None => (fallback?.0, false),
     };
     let reason = if feasible {
         None

@@ -287,10 +287,11 @@ mod tests {
         let mut best = f64::INFINITY;
         for_each_6_subset(w.len(), |idx| {
             let m = Matrix6::from_fn(|r, c| w[idx[r]][c]);
-            if let Some(a) = m.lu().solve(&Vector6::repeat(1.0)) {
-                if a.iter().all(|v| v.is_finite()) && w.iter().all(|x| a.dot(x) <= 1.0 + 1e-9) {
-                    best = best.min(1.0 / a.norm());
-                }
+            if let Some(a) = m.lu().solve(&Vector6::repeat(1.0))
+                && a.iter().all(|v| v.is_finite())
+                && w.iter().all(|x| a.dot(x) <= 1.0 + 1e-9)
+            {
+                best = best.min(1.0 / a.norm());
             }
         });
         if best.is_finite() { best } else { 0.0 }

@@ -170,13 +170,14 @@ impl SearchProblem for OppositionSearch<'_, '_> {
                 feasible: false,
             };
         }
-        if a.q > best && self.ctx.options.check_collisions {
-            if self.ctx.collides(&c[..1], &c[1..], &a) {
-                return Scored {
-                    merit: MERIT_COLLIDING,
-                    feasible: false,
-                };
-            }
+        if a.q > best
+            && self.ctx.options.check_collisions
+            && self.ctx.collides(&c[..1], &c[1..], &a)
+        {
+            return Scored {
+                merit: MERIT_COLLIDING,
+                feasible: false,
+            };
         }
         Scored {
             merit: a.q,

@@ -254,13 +254,12 @@ impl SearchContext<'_> {
         let Some(hands) = self.posed(h1, h2, a) else {
             return true;
         };
-        if let Some(pl) = self.plane {
-            if hands
+        if let Some(pl) = self.plane
+            && hands
                 .iter()
                 .any(|h| h.plane_clearance(&pl) < -PLANE_TOLERANCE)
-            {
-                return true;
-            }
+        {
+            return true;
         }
         let n = collision::DEFAULT_MIN_POINTS;
         hands
