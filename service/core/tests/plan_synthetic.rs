@@ -150,3 +150,77 @@ fn forced_types_and_ablation() {
     println!("ablation: {}", report(&p));
     assert_eq!(p.contacts.len(), 3);
 }
+
+/// A hand that is not in the catalog, described inline: four fingers (an Allegro-like thumb and
+/// three fingers), realising precision with 4 contacts and tripod with 3.
+#[test]
+fn an_inline_four_finger_hand_plans_like_the_builtins() {
+    let hand = graspd_core::hand::parse_hand_toml(
+        r#"
+        name = "four_finger"
+        [geometry]
+        palm_width = 0.095
+        palm_length = 0.1
+        palm_thickness = 0.04
+        max_aperture = 0.13
+        max_height = 0.1
+        finger_width = 0.028
+        [[fingers]]
+        name = "thumb"
+        thumb = true
+        parts = ["TT", "TS"]
+        length = 0.1
+        base = [-0.04, -0.02, 0.0]
+        [[fingers]]
+        name = "index"
+        parts = ["FT", "FS"]
+        length = 0.11
+        base = [0.045, -0.035, 0.0]
+        [[fingers]]
+        name = "middle"
+        parts = ["FT", "FS"]
+        length = 0.11
+        base = [0.045, 0.0, 0.0]
+        [[fingers]]
+        name = "ring"
+        parts = ["FT", "FS"]
+        length = 0.11
+        base = [0.045, 0.035, 0.0]
+        [[grasp_types]]
+        type = "precision"
+        h1 = ["thumb"]
+        h2 = ["index", "middle", "ring"]
+        [[grasp_types]]
+        type = "tripod"
+        h1 = ["thumb"]
+        h2 = ["index", "middle"]
+        "#,
+    )
+    .unwrap();
+    let view = Point3::new(0.45, 0.1, 0.35);
+    let pts = visible_cylinder(0.066, 0.10, view);
+    for (t, m) in [(GraspType::Precision, 4), (GraspType::Tripod, 3)] {
+        let mut inp = input(pts.clone(), "shadow", view, 2);
+        inp.hand = hand.clone();
+        inp.hints.grasp_type = Some(t);
+        let p = plan(inp).unwrap();
+        println!("four_finger {t}: {}", report(&p));
+        assert_eq!((p.grasp_type, p.contacts.len()), (t, m));
+        assert!(p.feasible, "{:?}", p.infeasible_reason);
+        let fingers: Vec<&str> = p.contacts.iter().map(|c| c.finger.as_str()).collect();
+        assert!(fingers.contains(&"thumb") && fingers.contains(&"index"));
+    }
+    // Not realised by this hand: refused when forced, mapped when detected.
+    let mut inp = input(pts.clone(), "shadow", view, 2);
+    inp.hand = hand.clone();
+    inp.hints.grasp_type = Some(GraspType::SmallWrap);
+    let e = plan(inp).unwrap_err().to_string();
+    assert!(e.starts_with("hints.grasp_type"), "{e}");
+    let mut inp = input(pts, "shadow", view, 2);
+    inp.hand = hand;
+    let p = plan(inp).unwrap();
+    assert!(matches!(
+        p.grasp_type,
+        GraspType::Precision | GraspType::Tripod
+    ));
+}
