@@ -1,1 +1,277 @@
+//! Harness of the end-to-end tests: starts the real `graspd` binary on ephemeral loopback ports,
+//! reads the `graspd listening …` line to learn them, and kills the process on drop. Also the
+//! synthetic clouds and request builders the tests share.
+//!
+//! The binaries come from `GRASPD_BIN` / `GRASPCTL_BIN`, else `<target>/debug/`; build them
+//! first (`make test` or `cargo build --bins`).
 
+use base64::Engine;
+use graspd_core::cloud::encode_packed_xyz;
+use graspd_proto::v1 as pb;
+use graspd_proto::v1::grasp_planner_client::GraspPlannerClient;
+use nalgebra::Point3;
+use std::io::{BufRead, BufReader};
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+use tonic::transport::Channel;
+
+/// How long the server may take to print its listening line.
+const START_TIMEOUT: Duration = Duration::from_secs(30);
+
+fn target_dir() -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(dir) => PathBuf::from(dir),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .parent()
+            .expect("tests/ has a parent")
+            .join("target"),
+    }
+}
+
+/// The path of a workspace binary: `$env_var`, else `<target>/debug/<name>`.
+pub fn binary(name: &str, env_var: &str) -> PathBuf {
+    let path = std::env::var_os(env_var)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| target_dir().join("debug").join(name));
+    assert!(
+        path.is_file(),
+        "{} not found: run `make test` or `cargo build --bins` first (or set {env_var})",
+        path.display()
+    );
+    path
+}
+
+/// A running `graspd`; killed when dropped.
+pub struct Server {
+    child: Child,
+    pub grpc_addr: SocketAddr,
+    pub rest_addr: SocketAddr,
+}
+
+impl Server {
+    /// Starts graspd with default limits.
+    pub fn start() -> Self {
+        Self::start_with(&[])
+    }
+
+    /// Starts graspd with extra flags (e.g. `["--max-message-bytes", "65536"]`).
+    pub fn start_with(args: &[&str]) -> Self {
+        let mut command = Command::new(binary("graspd", "GRASPD_BIN"));
+        for var in [
+            "GRASPD_CONFIG",
+            "GRASPD_GRPC_ADDR",
+            "GRASPD_REST_ADDR",
+            "GRASPD_MAX_MESSAGE_BYTES",
+            "GRASPD_MAX_POINTS",
+            "GRASPD_MAX_CONCURRENT_PLANS",
+            "GRASPD_LOG_FORMAT",
+        ] {
+            command.env_remove(var);
+        }
+        if std::env::var_os("GRASPD_LOG").is_none() {
+            command.env("GRASPD_LOG", "warn");
+        }
+        let mut child = command
+            .args(["--grpc-addr", "127.0.0.1:0", "--rest-addr", "127.0.0.1:0"])
+            .args(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("cannot start graspd");
+        let stdout = child.stdout.take().expect("piped stdout");
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines() {
+                let Ok(line) = line else { break };
+                if line.starts_with("graspd listening ") {
+                    let _ = tx.send(line);
+                }
+            }
+        });
+        let line = match rx.recv_timeout(START_TIMEOUT) {
+            Ok(line) => line,
+            Err(_) => {
+                let _ = child.kill();
+                let status = child.wait();
+                panic!("graspd did not print its listening line (exit: {status:?})");
+            }
+        };
+        let addr = |key: &str| -> SocketAddr {
+            line.split_whitespace()
+                .find_map(|w| w.strip_prefix(key))
+                .and_then(|a| a.parse().ok())
+                .unwrap_or_else(|| panic!("no {key}ADDR in '{line}'"))
+        };
+        Server {
+            grpc_addr: addr("grpc="),
+            rest_addr: addr("rest="),
+            child,
+        }
+    }
+
+    pub fn grpc_url(&self) -> String {
+        format!("http://{}", self.grpc_addr)
+    }
+
+    pub fn rest_url(&self, path: &str) -> String {
+        format!("http://{}{path}", self.rest_addr)
+    }
+
+    pub async fn grpc(&self) -> GraspPlannerClient<Channel> {
+        GraspPlannerClient::connect(self.grpc_url())
+            .await
+            .expect("connect to graspd's gRPC port")
+    }
+
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Sends SIGTERM and waits for the exit.
+    pub fn terminate(mut self) -> ExitStatus {
+        let ok = Command::new("kill")
+            .args(["-TERM", &self.child.id().to_string()])
+            .status()
+            .expect("run kill")
+            .success();
+        assert!(ok, "kill -TERM failed");
+        for _ in 0..200 {
+            if let Some(status) = self.child.try_wait().expect("wait for graspd") {
+                return status;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        panic!("graspd did not exit within 10 s of SIGTERM");
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+/// An HTTP client for the REST tests.
+pub fn http() -> reqwest::Client {
+    reqwest::Client::builder()
+        .timeout(Duration::from_secs(60))
+        .build()
+        .expect("http client")
+}
+
+/// `n` points on a 7 cm-diameter, 10 cm-tall cylinder standing on z = 0 (side and top, the
+/// part a camera above would see), rounded to float32 so that packed and JSON encodings carry
+/// the same values.
+pub fn cylinder(n: usize) -> Vec<Point3<f64>> {
+    let r = 0.035;
+    let h = 0.10;
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let top = n / 5;
+    let f = |v: f64| v as f32 as f64;
+    (0..n)
+        .map(|i| {
+            let a = i as f64 * golden;
+            if i < top {
+                let rho = r * ((i as f64 + 0.5) / top as f64).sqrt();
+                Point3::new(f(rho * a.cos()), f(rho * a.sin()), f(h))
+            } else {
+                let t = (i - top) as f64 / (n - top) as f64;
+                Point3::new(f(r * a.cos()), f(r * a.sin()), f(h * t))
+            }
+        })
+        .collect()
+}
+
+/// Packed little-endian float32 x, y, z.
+pub fn packed(points: &[Point3<f64>]) -> Vec<u8> {
+    encode_packed_xyz(points)
+}
+
+pub fn base64(bytes: &[u8]) -> String {
+    base64::engine::general_purpose::STANDARD.encode(bytes)
+}
+
+/// The support plane z = 0 of [`cylinder`].
+pub fn table_plane() -> pb::Plane {
+    pb::Plane {
+        normal: Some(pb::Vec3 {
+            x: 0.0,
+            y: 0.0,
+            z: 1.0,
+        }),
+        offset: 0.0,
+    }
+}
+
+/// A valid gRPC plan request on the cylinder.
+pub fn grpc_request(hand: &str, seed: u64) -> pb::PlanGraspRequest {
+    grpc_request_with_points(packed(&cylinder(2000)), hand, seed)
+}
+
+pub fn grpc_request_with_points(points: Vec<u8>, hand: &str, seed: u64) -> pb::PlanGraspRequest {
+    pb::PlanGraspRequest {
+        input: Some(pb::plan_grasp_request::Input::Cloud(pb::PointCloud {
+            points,
+            normals: Vec::new(),
+            frame_id: "world".into(),
+        })),
+        hand: Some(pb::plan_grasp_request::Hand::HandName(hand.into())),
+        options: Some(pb::PlannerOptions {
+            seed: Some(seed),
+            ..Default::default()
+        }),
+        hints: Some(pb::PlanHints {
+            support_plane: Some(table_plane()),
+            ..Default::default()
+        }),
+    }
+}
+
+/// The same request as [`grpc_request`] in REST JSON (points as base64 of the same bytes).
+pub fn json_request(hand: &str, seed: u64) -> serde_json::Value {
+    serde_json::json!({
+        "cloud": {"points": base64(&packed(&cylinder(2000)))},
+        "hand_name": hand,
+        "options": {"seed": seed},
+        "hints": {"support_plane": {"normal": [0, 0, 1], "offset": 0}},
+    })
+}
+
+/// Asserts that a valid plan request still succeeds through both transports (after a bad one).
+pub async fn assert_valid_plan_works(server: &Server) {
+    let response = server
+        .grpc()
+        .await
+        .plan_grasp(grpc_request("shadow", 1))
+        .await;
+    assert!(response.is_ok(), "valid gRPC plan failed: {response:?}");
+    let response = http()
+        .post(server.rest_url("/v1/plan"))
+        .json(&json_request("shadow", 1))
+        .send()
+        .await
+        .expect("REST request");
+    let status = response.status();
+    let body = response.text().await.unwrap_or_default();
+    assert_eq!(status, 200, "valid REST plan failed: {body}");
+}
+
+/// A REST error body: (code, field, message).
+pub async fn rest_error(response: reqwest::Response) -> (u16, String, Option<String>, String) {
+    let status = response.status().as_u16();
+    let body: serde_json::Value = response.json().await.expect("error body is JSON");
+    let e = &body["error"];
+    (
+        status,
+        e["code"].as_str().unwrap_or_default().to_string(),
+        e["field"].as_str().map(str::to_string),
+        e["message"].as_str().unwrap_or_default().to_string(),
+    )
+}

@@ -28,37 +28,33 @@ pub fn to_status(e: ServiceError) -> Status {
 /// tonic refuses a request larger than `max_decoding_message_size` with OUT_OF_RANGE and a
 /// message that names no limit; callers get RESOURCE_EXHAUSTED naming `max_message_bytes`.
 pub fn rewrite_too_large<B>(mut response: http::Response<B>, limit: usize) -> http::Response<B> {
-    let headers = response.headers_mut();
-    let is_out_of_range = headers
-        .get(Status::GRPC_STATUS)
-        .is_some_and(|v| v.as_bytes() == b"11");
-    if !is_out_of_range {
-        return response;
-    }
-    let Some(message) = headers
-        .get(Status::GRPC_MESSAGE)
-        .and_then(|v| v.to_str().ok())
-    else {
+    let Some(original) = Status::from_header_map(response.headers()) else {
         return response;
     };
-    if !message.contains("decoded message length too large") {
+    if original.code() != Code::OutOfRange
+        || !original
+            .message()
+            .contains("decoded message length too large")
+    {
         return response;
     }
-    let found = message
+    let found = original
+        .message()
         .split("found ")
         .nth(1)
         .and_then(|s| s.split(' ').next())
         .unwrap_or("?")
         .to_string();
-    let status = Status::new(
+    let mut status = Status::new(
         Code::ResourceExhausted,
         format!(
             "request: message of {found} bytes exceeds the configured limit of {limit} bytes (max_message_bytes)"
         ),
     );
-    let _ = status.add_header(headers);
     if let Ok(v) = "request".parse() {
-        headers.insert(FIELD_METADATA_KEY, v);
+        status.metadata_mut().insert(FIELD_METADATA_KEY, v);
     }
+    let _ = status.add_header(response.headers_mut());
+    response.extensions_mut().insert(status);
     response
 }

@@ -23,12 +23,21 @@ use std::fmt;
 
 /// Parses JSON; errors name the field by its path (`hints.grasp_type`, `options.foo`), or
 /// `root` (e.g. `body`) when the JSON itself is malformed.
+/// The JSON must be an object (serde would also read a struct from an array).
 pub fn parse<T: DeserializeOwned>(bytes: &[u8], root: &str) -> Result<T, FieldError> {
+    match bytes.iter().find(|b| !b.is_ascii_whitespace()) {
+        Some(b'{') => {}
+        Some(_) => return Err(FieldError::new(root, "must be a JSON object")),
+        None => return Err(FieldError::new(root, "is empty; expected a JSON object")),
+    }
     let de = &mut serde_json::Deserializer::from_slice(bytes);
     let value = serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
+        let top = path == "." || path == "?" || path.is_empty();
+        // Truncated JSON is the body's fault, not the field's where it stopped.
+        let syntax = e.inner().classify() == serde_json::error::Category::Eof;
         let message = e.inner().to_string();
-        let mut field = if path == "." || path == "?" || path.is_empty() {
+        let mut field = if top || syntax {
             root.to_string()
         } else {
             path
@@ -38,7 +47,7 @@ pub fn parse<T: DeserializeOwned>(bytes: &[u8], root: &str) -> Result<T, FieldEr
             && let Some(name) = rest.split('`').next()
             && !field.ends_with(name)
         {
-            field = if field == root && root == "body" {
+            field = if top {
                 name.to_string()
             } else {
                 format!("{field}.{name}")

@@ -1,0 +1,124 @@
+//! The graspctl binary against a running server.
+
+use graspd_core::cloud::io::write_ply_ascii;
+use graspd_e2e::{Server, binary, cylinder};
+use std::process::{Command, Output};
+
+fn graspctl(server: &Server, args: &[&str]) -> Output {
+    Command::new(binary("graspctl", "GRASPCTL_BIN"))
+        .env_remove("GRASPD_SERVER")
+        .arg("--server")
+        .arg(server.grpc_url())
+        .args(args)
+        .output()
+        .expect("run graspctl")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn cloud_file(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("graspd-e2e-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, write_ply_ascii(&cylinder(2000), None)).unwrap();
+    path
+}
+
+#[test]
+fn hands_lists_and_shows() {
+    let server = Server::start();
+    let out = graspctl(&server, &["hands"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    for name in ["barrett", "parallel_gripper", "shadow"] {
+        assert!(stdout.contains(name), "{stdout}");
+    }
+    let out = graspctl(&server, &["hands", "barrett"]);
+    assert!(out.status.success());
+    assert!(text(&out.stdout).contains("small_wrap  same as large_wrap"));
+    let out = graspctl(&server, &["hands", "nope"]);
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("unknown hand 'nope'"));
+}
+
+#[test]
+fn plan_prints_a_summary_and_json() {
+    let server = Server::start();
+    let cloud = cloud_file("cylinder.ply");
+    let cloud = cloud.to_str().unwrap();
+    let out = graspctl(
+        &server,
+        &[
+            "plan",
+            "--cloud",
+            cloud,
+            "--hand",
+            "shadow",
+            "--seed",
+            "3",
+            "--support-plane",
+            "0,0,1,0",
+            "--grasp-type",
+            "tripod",
+        ],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    for needle in [
+        "grasp type      tripod (source: request)",
+        "opposition      TT-FT",
+        "hand pose",
+        "pre-grasp pose",
+        "quality         S (GII)",
+        "stage 1",
+        "timings",
+    ] {
+        assert!(stdout.contains(needle), "missing '{needle}' in\n{stdout}");
+    }
+
+    let out = graspctl(
+        &server,
+        &[
+            "--json",
+            "plan",
+            "--cloud",
+            cloud,
+            "--hand",
+            "barrett",
+            "--viewpoint",
+            "0,-0.5,0.4",
+        ],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("--json prints JSON");
+    assert_eq!(json["hand"], "barrett");
+    assert!(json["contacts"].as_array().is_some_and(|c| !c.is_empty()));
+
+    let out = graspctl(
+        &server,
+        &[
+            "plan",
+            "--cloud",
+            cloud,
+            "--hand",
+            "parallel_gripper",
+            "--grasp-type",
+            "tripod",
+        ],
+    );
+    assert!(!out.status.success());
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains("InvalidArgument") && stderr.contains("hints.grasp_type"),
+        "{stderr}"
+    );
+
+    let out = graspctl(
+        &server,
+        &["plan", "--cloud", "/nonexistent.ply", "--hand", "shadow"],
+    );
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("/nonexistent.ply"));
+}
