@@ -131,21 +131,21 @@ impl Server {
         self.child.id()
     }
 
-    /// Sends SIGTERM and waits for the exit.
-    pub fn terminate(mut self) -> ExitStatus {
+    /// Sends `signal` (e.g. "TERM", "INT") and waits for the exit.
+    pub fn signal(mut self, signal: &str) -> ExitStatus {
         let ok = Command::new("kill")
-            .args(["-TERM", &self.child.id().to_string()])
+            .args([&format!("-{signal}"), &self.child.id().to_string()])
             .status()
             .expect("run kill")
             .success();
-        assert!(ok, "kill -TERM failed");
+        assert!(ok, "kill -{signal} failed");
         for _ in 0..200 {
             if let Some(status) = self.child.try_wait().expect("wait for graspd") {
                 return status;
             }
             std::thread::sleep(Duration::from_millis(50));
         }
-        panic!("graspd did not exit within 10 s of SIGTERM");
+        panic!("graspd did not exit within 10 s of SIG{signal}");
     }
 }
 

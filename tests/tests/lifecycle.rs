@@ -1,19 +1,44 @@
-//! Process behaviour: graceful shutdown on SIGTERM, and configuration from a file.
+//! Process behaviour: graceful shutdown on SIGTERM and Ctrl-C, gRPC health, and configuration from a file.
 
 use graspd_e2e::{Server, binary, http};
 use std::process::Command;
 
 #[tokio::test]
-async fn sigterm_stops_the_server_cleanly() {
+async fn sigterm_and_ctrl_c_stop_the_server_cleanly() {
+    for signal in ["TERM", "INT"] {
+        let server = Server::start();
+        let response = http()
+            .get(server.rest_url("/healthz"))
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(response.status(), 200);
+        let status = server.signal(signal);
+        assert!(status.success(), "SIG{signal}: {status:?}");
+    }
+}
+
+#[tokio::test]
+async fn grpc_health_reports_serving() {
+    use tonic_health::pb::health_check_response::ServingStatus;
+    use tonic_health::pb::{HealthCheckRequest, health_client::HealthClient};
     let server = Server::start();
-    let response = http()
-        .get(server.rest_url("/healthz"))
-        .send()
+    let channel = tonic::transport::Channel::from_shared(server.grpc_url())
+        .unwrap()
+        .connect()
         .await
         .unwrap();
-    assert_eq!(response.status(), 200);
-    let status = server.terminate();
-    assert!(status.success(), "{status:?}");
+    let mut health = HealthClient::new(channel);
+    for service in ["", "graspd.v1.GraspPlanner"] {
+        let response = health
+            .check(HealthCheckRequest {
+                service: service.into(),
+            })
+            .await
+            .unwrap()
+            .into_inner();
+        assert_eq!(response.status(), ServingStatus::Serving, "'{service}'");
+    }
 }
 
 #[test]
