@@ -275,3 +275,13 @@ pub async fn rest_error(response: reqwest::Response) -> (u16, String, Option<Str
         e["message"].as_str().unwrap_or_default().to_string(),
     )
 }
+
+/// Drops the wall-clock fields, which differ between any two runs.
+pub fn without_timings(mut v: serde_json::Value) -> serde_json::Value {
+    let o = v.as_object_mut().unwrap();
+    o.remove("timings");
+    for stage in ["stage1", "stage2"] {
+        o[stage].as_object_mut().unwrap().remove("seconds");
+    }
+    v
+}

@@ -5,21 +5,11 @@ use graspd::grpc::convert::plan_from_proto;
 use graspd::rest::json::PlanResponseJson;
 use graspd_core::GraspType;
 use graspd_core::cloud::io::write_ply_binary;
-use graspd_e2e::{Server, cylinder, grpc_request, http, json_request};
+use graspd_e2e::{Server, cylinder, grpc_request, http, json_request, without_timings};
 use graspd_proto::v1 as pb;
 
 fn close(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-6
-}
-
-/// Drops the wall-clock fields, which differ between any two runs.
-fn without_timings(mut v: serde_json::Value) -> serde_json::Value {
-    let o = v.as_object_mut().unwrap();
-    o.remove("timings");
-    for stage in ["stage1", "stage2"] {
-        o[stage].as_object_mut().unwrap().remove("seconds");
-    }
-    v
 }
 
 #[tokio::test]
