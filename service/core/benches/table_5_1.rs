@@ -5,7 +5,7 @@
 //! `cargo bench -p graspd-core --bench table_5_1` (add `-- --quick` for fewer seeds).
 //!
 //! Two settings are measured:
-//! * service defaults: iterations = clamp(10 % of |Φ|, 100, 1500) per stage, early stop after 400
+//! * service defaults: iterations = clamp(10 % of |Φ|, 100, 1200) per stage, early stop after 250
 //!   iterations without improvement — what graspd answers requests with;
 //! * thesis rule: iterations = 10 % of |Φ| with no cap but a safety limit of 1,000,000, as in the
 //!   text (the setting of Table 5.1: same algorithm and parameters for both variants).
