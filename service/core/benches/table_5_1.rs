@@ -16,16 +16,7 @@ use graspd_testkit::view::standard_view;
 use graspd_testkit::ycb::Object;
 use std::time::Instant;
 
-const OBJECTS: [Object; 8] = [
-    Object::ChipsCan,
-    Object::TomatoSoupCan,
-    Object::TunaFishCan,
-    Object::PottedMeatCan,
-    Object::MustardBottle,
-    Object::Banana,
-    Object::Apple,
-    Object::Orange,
-];
+const OBJECTS: [Object; 8] = Object::TABLE_5_2;
 
 struct Run {
     seconds: f64,

@@ -7,16 +7,7 @@ use graspd_core::{GraspPlan, HandCatalog};
 use graspd_testkit::view::standard_view;
 use graspd_testkit::ycb::Object;
 
-const OBJECTS: [Object; 8] = [
-    Object::ChipsCan,
-    Object::TomatoSoupCan,
-    Object::TunaFishCan,
-    Object::PottedMeatCan,
-    Object::MustardBottle,
-    Object::Banana,
-    Object::Apple,
-    Object::Orange,
-];
+const OBJECTS: [Object; 8] = Object::TABLE_5_2;
 
 fn plan_view(object: Object, hand: &str, seed: u64) -> (GraspPlan, PointCloud) {
     let v = standard_view(object, 2000, seed);

@@ -53,6 +53,18 @@ impl Object {
         Object::Orange,
     ];
 
+    /// The eight objects of the dissertation's grasping evaluation (Table 5.2).
+    pub const TABLE_5_2: [Object; 8] = [
+        Object::ChipsCan,
+        Object::TomatoSoupCan,
+        Object::TunaFishCan,
+        Object::PottedMeatCan,
+        Object::MustardBottle,
+        Object::Banana,
+        Object::Apple,
+        Object::Orange,
+    ];
+
     /// The YCB id, which is also the folder name, e.g. `005_tomato_soup_can`.
     pub fn id(self) -> &'static str {
         match self {

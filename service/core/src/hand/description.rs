@@ -423,19 +423,20 @@ impl HandDescription {
         if let Some(s) = self.geometry.max_finger_spread {
             return s;
         }
-        let mut ys: Vec<f64> = self
-            .fingers
-            .iter()
-            .filter(|f| !f.thumb)
-            .map(|f| f.base[1])
+        let others = (0..self.fingers.len()).filter(|&i| !self.fingers[i].thumb);
+        (2.5 * self.mean_finger_spacing(others)).max(2.0 * self.geometry.finger_width)
+    }
+
+    /// Mean gap between neighbouring bases (along y) of the given fingers; 0 for fewer than two.
+    pub fn mean_finger_spacing(&self, fingers: impl IntoIterator<Item = usize>) -> f64 {
+        let mut ys: Vec<f64> = fingers
+            .into_iter()
+            .map(|f| self.fingers[f].base[1])
             .collect();
+        if ys.len() < 2 {
+            return 0.0;
+        }
         ys.sort_by(f64::total_cmp);
-        let gaps: Vec<f64> = ys.windows(2).map(|w| w[1] - w[0]).collect();
-        let mean = if gaps.is_empty() {
-            0.0
-        } else {
-            gaps.iter().sum::<f64>() / gaps.len() as f64
-        };
-        (2.5 * mean).max(2.0 * self.geometry.finger_width)
+        (ys[ys.len() - 1] - ys[0]) / (ys.len() - 1) as f64
     }
 }

@@ -9,9 +9,7 @@
 
 use super::annealing::{Annealed, Schedule, Scored, SearchProblem, anneal};
 use super::opposition::OppositionSearch;
-use super::search_context::{
-    Assessment, MERIT_COLLIDING, MERIT_GEOMETRY, MERIT_UNSTABLE, SearchContext,
-};
+use super::search_context::{Assessment, SearchContext};
 use super::slot_set::SlotSet;
 use super::types::{PlannerMode, StageStats};
 use nalgebra::{Point3, Vector3};
@@ -195,42 +193,16 @@ impl<'c, 'a> ContactSearch<'c, 'a> {
 
     /// Why a configuration is infeasible (None when it is feasible).
     pub fn explain(&self, c: &[usize]) -> Option<String> {
-        let a = self.assess(c);
-        if a.violation > 0.0 {
-            return a.reason;
-        }
-        let s = self.ctx.stability(c);
-        if s < self.ctx.options.epsilon {
-            return Some(format!("S = {s:.3} < ε = {}", self.ctx.options.epsilon));
-        }
-        if self.ctx.options.check_collisions {
-            let (h1, h2) = c.split_at(self.k1);
-            let col = self.ctx.collisions(h1, h2, &a)?;
-            if !col.clear() {
-                return Some(col.describe());
-            }
-        }
-        None
+        self.ctx.explain(&self.assess(c), c, self.k1)
     }
 }
 
 /// Distance between neighbouring fingers' contacts to aim for: the mean spacing of the h2
-/// fingers' bases, at least a finger width.
+/// fingers' bases, at least 1.1 finger widths.
 fn finger_spacing(ctx: &SearchContext) -> f64 {
-    let mut ys: Vec<f64> = ctx
-        .grasp
-        .h2_fingers
-        .iter()
-        .map(|&f| ctx.hand.fingers[f].base[1])
-        .collect();
-    ys.sort_by(f64::total_cmp);
-    let gaps: Vec<f64> = ys.windows(2).map(|w| w[1] - w[0]).collect();
-    let mean = if gaps.is_empty() {
-        0.0
-    } else {
-        gaps.iter().sum::<f64>() / gaps.len() as f64
-    };
-    mean.max(ctx.hand.geometry.finger_width * 1.1)
+    ctx.hand
+        .mean_finger_spacing(ctx.grasp.h2_fingers.iter().copied())
+        .max(ctx.hand.geometry.finger_width * 1.1)
 }
 
 impl SearchProblem for ContactSearch<'_, '_> {
@@ -248,39 +220,7 @@ impl SearchProblem for ContactSearch<'_, '_> {
     }
     fn evaluate(&mut self, c: &[usize], threshold: f64, best: f64) -> Scored {
         let a = self.assess(c);
-        if a.violation > 0.0 {
-            return Scored {
-                merit: MERIT_GEOMETRY - a.violation,
-                feasible: false,
-            };
-        }
-        if a.q <= threshold {
-            return Scored {
-                merit: a.q,
-                feasible: false,
-            };
-        }
-        let eps = self.ctx.options.epsilon;
-        let s = self.ctx.stability(c);
-        if s < eps {
-            return Scored {
-                merit: MERIT_UNSTABLE - (eps - s),
-                feasible: false,
-            };
-        }
-        if a.q > best && self.ctx.options.check_collisions {
-            let (h1, h2) = c.split_at(self.k1);
-            if self.ctx.collides(h1, h2, &a) {
-                return Scored {
-                    merit: MERIT_COLLIDING,
-                    feasible: false,
-                };
-            }
-        }
-        Scored {
-            merit: a.q,
-            feasible: true,
-        }
+        self.ctx.score(&a, c, self.k1, threshold, best)
     }
 }
 

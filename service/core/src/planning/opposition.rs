@@ -7,9 +7,7 @@
 //! cones (μ), so that two opposing forces can squeeze the object.
 
 use super::annealing::{Scored, SearchProblem};
-use super::search_context::{
-    Assessment, MERIT_COLLIDING, MERIT_GEOMETRY, MERIT_UNSTABLE, SearchContext,
-};
+use super::search_context::{Assessment, SearchContext};
 use super::slot_set::SlotSet;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -117,21 +115,7 @@ impl<'c, 'a> OppositionSearch<'c, 'a> {
 
     /// Why a configuration is infeasible (None when it is feasible).
     pub fn explain(&self, c: &[usize]) -> Option<String> {
-        let a = self.assess(c[0], c[1]);
-        if a.violation > 0.0 {
-            return a.reason;
-        }
-        let s = self.ctx.stability(c);
-        if s < self.ctx.options.epsilon {
-            return Some(format!("S = {s:.3} < ε = {}", self.ctx.options.epsilon));
-        }
-        if self.ctx.options.check_collisions {
-            let col = self.ctx.collisions(&c[..1], &c[1..], &a)?;
-            if !col.clear() {
-                return Some(col.describe());
-            }
-        }
-        None
+        self.ctx.explain(&self.assess(c[0], c[1]), c, 1)
     }
 }
 
@@ -150,38 +134,6 @@ impl SearchProblem for OppositionSearch<'_, '_> {
     }
     fn evaluate(&mut self, c: &[usize], threshold: f64, best: f64) -> Scored {
         let a = self.assess(c[0], c[1]);
-        if a.violation > 0.0 {
-            return Scored {
-                merit: MERIT_GEOMETRY - a.violation,
-                feasible: false,
-            };
-        }
-        if a.q <= threshold {
-            return Scored {
-                merit: a.q,
-                feasible: false,
-            };
-        }
-        let eps = self.ctx.options.epsilon;
-        let s = self.ctx.stability(c);
-        if s < eps {
-            return Scored {
-                merit: MERIT_UNSTABLE - (eps - s),
-                feasible: false,
-            };
-        }
-        if a.q > best
-            && self.ctx.options.check_collisions
-            && self.ctx.collides(&c[..1], &c[1..], &a)
-        {
-            return Scored {
-                merit: MERIT_COLLIDING,
-                feasible: false,
-            };
-        }
-        Scored {
-            merit: a.q,
-            feasible: true,
-        }
+        self.ctx.score(&a, c, 1, threshold, best)
     }
 }

@@ -2,6 +2,7 @@
 //! a contact set against Eq 5.2 — hand frame, palm height, R, G, S, the hand's limits and the
 //! collision check. Stage-specific feasibility lives in `opposition.rs` and `dual_stage.rs`.
 
+use super::annealing::Scored;
 use super::collision::{self, FingerContact, PosedHand};
 use super::hand_pose::{self, HandFrame, finger_frame, palm_frame};
 use super::object_shape::ObjectShape;
@@ -183,6 +184,68 @@ impl SearchContext<'_> {
         out.g = g;
         out.q = weights[0] * r + weights[1] * g;
         out
+    }
+
+    /// Scores an assessed configuration for the annealing, cheapest checks first (see
+    /// `SearchProblem::evaluate`): the hand's limits, the objective against the acceptance
+    /// threshold, S ≥ ε, and — only for a new optimum — the collision check. `k1` contacts of
+    /// `c` are on the h1 side.
+    pub fn score(
+        &self,
+        a: &Assessment,
+        c: &[usize],
+        k1: usize,
+        threshold: f64,
+        best: f64,
+    ) -> Scored {
+        if a.violation > 0.0 {
+            return Scored {
+                merit: MERIT_GEOMETRY - a.violation,
+                feasible: false,
+            };
+        }
+        if a.q <= threshold {
+            return Scored {
+                merit: a.q,
+                feasible: false,
+            };
+        }
+        let eps = self.options.epsilon;
+        let s = self.stability(c);
+        if s < eps {
+            return Scored {
+                merit: MERIT_UNSTABLE - (eps - s),
+                feasible: false,
+            };
+        }
+        if a.q > best && self.options.check_collisions && self.collides(&c[..k1], &c[k1..], a) {
+            return Scored {
+                merit: MERIT_COLLIDING,
+                feasible: false,
+            };
+        }
+        Scored {
+            merit: a.q,
+            feasible: true,
+        }
+    }
+
+    /// Why an assessed configuration is infeasible (None when it is feasible).
+    pub fn explain(&self, a: &Assessment, c: &[usize], k1: usize) -> Option<String> {
+        if a.violation > 0.0 {
+            return a.reason.clone();
+        }
+        let s = self.stability(c);
+        if s < self.options.epsilon {
+            return Some(format!("S = {s:.3} < ε = {}", self.options.epsilon));
+        }
+        if self.options.check_collisions {
+            let col = self.collisions(&c[..k1], &c[k1..], a)?;
+            if !col.clear() {
+                return Some(col.describe());
+            }
+        }
+        None
     }
 
     /// S of Eq 5.3 for the contacts (with a palm contact modelled as a soft contact too).
