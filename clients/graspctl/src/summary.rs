@@ -163,8 +163,10 @@ pub fn plan(plan: &GraspPlan) -> String {
     );
     let _ = writeln!(
         w,
-        "points used     {}, mode {:?}, seed {}",
-        plan.points_used, plan.mode, plan.seed
+        "points used     {}, mode {}, seed {}",
+        plan.points_used,
+        plan.mode.name(),
+        plan.seed
     );
     for warning in &plan.warnings {
         let _ = writeln!(w, "warning         {warning}");

@@ -15,6 +15,16 @@ pub enum PlannerMode {
     WithoutOpposition,
 }
 
+impl PlannerMode {
+    /// The snake_case name used in the API.
+    pub fn name(self) -> &'static str {
+        match self {
+            PlannerMode::DualStage => "dual_stage",
+            PlannerMode::WithoutOpposition => "without_opposition",
+        }
+    }
+}
+
 /// Planner parameters. Defaults are the dissertation's where it gives them (ε, μ, weights) and
 /// documented choices where it does not (method.md §3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
