@@ -6,6 +6,7 @@ pub mod error;
 pub mod grasp_type;
 pub mod hand;
 pub mod planning;
+pub mod tactile;
 
 pub use error::{FieldError, PlanError};
 pub use grasp_type::{GraspType, HandPart};

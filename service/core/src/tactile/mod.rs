@@ -1,0 +1,32 @@
+//! Tactile stabilization (method.md §5, dissertation ch. 6, Algorithm 5).
+//!
+//! The pipeline per finger and frame: taring (`taring`) → window sampling and contact-event
+//! detection (`detector`) → tactile image (`tactile_image`) → GMM force estimation
+//! (`force_estimation`, Eq 6.5–6.7) → desired force (`desired_force`, Eq 6.8–6.9) → PID
+//! (`pid`). `stabilizer::Stabilizer` runs it as a session; `recording` reads the CSV layout of the
+//! real BioTac recordings. Plain Rust: no transport types.
+
+pub mod desired_force;
+pub mod detector;
+pub mod force_estimation;
+pub mod layout;
+pub mod pid;
+pub mod recording;
+pub mod stabilizer;
+pub mod tactile_image;
+pub mod taring;
+
+pub use desired_force::{ControlMode, DesiredForceLaw};
+pub use detector::{
+    ContactEvent, Detection, EventDetector, Material, ModelFreeDetector, ModelFreeThresholds,
+    WindowSampler,
+};
+pub use force_estimation::{ContactEstimate, ForceEstimator, Gmm1d};
+pub use layout::{SensorCatalog, SensorLayout};
+pub use pid::{Pid, PidGains};
+pub use stabilizer::{
+    DetectorChoice, FingerConfig, FingerReading, FingerResult, Frame, FrameResult, Stabilizer,
+    StabilizerConfig,
+};
+pub use tactile_image::TactileImage;
+pub use taring::{Baseline, ElectrodePolarity, TareConfig};
