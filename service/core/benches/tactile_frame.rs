@@ -25,7 +25,7 @@ fn reading(i: usize) -> FingerReading {
     FingerReading {
         pdc: 2000.0 + press + (i % 3) as f64,
         pac: (0..22)
-            .map(|j| 2000.0 + if (i + j) % 2 == 0 { amp } else { -amp })
+            .map(|j| 2000.0 + if (i + j).is_multiple_of(2) { amp } else { -amp })
             .collect(),
         tdc: 2500.0,
         tac: 2000.0,
