@@ -139,7 +139,12 @@ fn separate_support_plane(
         } else {
             (None, PlaneSource::None, vec![true; cloud.points.len()])
         };
-    let original: Vec<usize> = (0..cloud.points.len()).filter(|&i| keep[i]).collect();
+    // Exact duplicates carry no information (and a k-d tree cannot split a bucket of identical
+    // points): keep the first of each.
+    let mut seen = std::collections::HashSet::with_capacity(cloud.points.len());
+    let original: Vec<usize> = (0..cloud.points.len())
+        .filter(|&i| keep[i] && seen.insert(cloud.points[i].coords.map(f64::to_bits)))
+        .collect();
     if original.len() < MIN_POINTS {
         return Err(FieldError::new(
             if source == PlaneSource::Request {
@@ -148,7 +153,7 @@ fn separate_support_plane(
                 "cloud"
             },
             format!(
-                "only {} of {} points lie above the support plane; the planner needs at least {MIN_POINTS} object points",
+                "only {} of {} points are distinct and above the support plane; the planner needs at least {MIN_POINTS} object points",
                 original.len(),
                 cloud.points.len()
             ),

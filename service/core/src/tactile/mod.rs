@@ -21,12 +21,13 @@ pub use detector::{
     ContactEvent, Detection, EventDetector, Material, ModelFreeDetector, ModelFreeThresholds,
     WindowSampler,
 };
-pub use force_estimation::{ContactEstimate, ForceEstimator, Gmm1d};
-pub use layout::{SensorCatalog, SensorLayout};
+pub use force_estimation::{ContactEstimate, EmOptions, ForceEstimator, Gmm1d};
+pub use layout::{LayoutSpec, SensorCatalog, SensorLayout, parse_layout_toml};
 pub use pid::{Pid, PidGains};
+pub use recording::{LabelThresholds, Recording};
 pub use stabilizer::{
-    DetectorChoice, FingerConfig, FingerReading, FingerResult, Frame, FrameResult, Stabilizer,
-    StabilizerConfig,
+    DetectorChoice, FingerConfig, FingerReading, FingerResult, ForceUnit, Frame, FrameResult,
+    Stabilizer, StabilizerConfig, analyze,
 };
 pub use tactile_image::TactileImage;
 pub use taring::{Baseline, ElectrodePolarity, TareConfig};

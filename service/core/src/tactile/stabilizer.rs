@@ -432,6 +432,25 @@ impl Stabilizer {
     }
 }
 
+/// Runs a whole recorded sequence through a fresh session (the REST analyze endpoint): one
+/// result per frame. An error names the frame by index (`frames[12].fingers[0].electrodes: …`).
+pub fn analyze(config: StabilizerConfig, frames: &[Frame]) -> Result<Vec<FrameResult>, FieldError> {
+    let mut s = Stabilizer::new(config)?;
+    frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            s.step(f).map_err(|e| {
+                let field = match e.field.strip_prefix("frame") {
+                    Some(rest) => format!("frames[{i}]{rest}"),
+                    None => e.field,
+                };
+                FieldError::new(field, e.message)
+            })
+        })
+        .collect()
+}
+
 impl FingerState {
     fn step(
         &mut self,
@@ -588,6 +607,25 @@ mod tests {
         next.timestamp = 1.05;
         s.step(&next).unwrap();
         assert_eq!(s.frames(), 2);
+    }
+
+    #[test]
+    fn biotac_sp_fingers_take_24_electrodes_and_analyze_names_the_frame() {
+        let mut c = StabilizerConfig::for_fingers(vec![finger("th", SensorLayout::biotac_sp())]);
+        c.window_length = 4;
+        let good = |t: f64| Frame {
+            timestamp: t,
+            fingers: vec![reading(24, 2000.0, 3000.0)],
+        };
+        let out = analyze(c.clone(), &[good(0.0), good(0.01)]).unwrap();
+        assert_eq!(out.len(), 2);
+        let mut bad = good(0.02);
+        bad.fingers[0].electrodes.truncate(19);
+        let e = analyze(c, &[good(0.0), good(0.01), bad]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "frames[2].fingers[0].electrodes: 19 values, layout biotac_sp has 24"
+        );
     }
 
     #[test]
