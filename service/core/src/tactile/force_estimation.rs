@@ -52,7 +52,7 @@ impl Default for EmOptions {
         Self {
             components: 3,
             max_iterations: 100,
-            tolerance: 1e-6,
+            tolerance: 1e-5,
             variance_floor: 1e-2,
         }
     }
@@ -155,12 +155,16 @@ impl Gmm1d {
 
     /// Posterior responsibility P(j | x).
     pub fn responsibility(&self, j: usize, x: f64) -> f64 {
-        let p: Vec<f64> = (0..self.means.len())
-            .map(|k| self.weights[k] * normal_pdf(x, self.means[k], self.variances[k]))
-            .collect();
-        let s: f64 = p.iter().sum();
+        let (mut s, mut pj) = (0.0, 0.0);
+        for k in 0..self.means.len() {
+            let p = self.weights[k] * normal_pdf(x, self.means[k], self.variances[k]);
+            s += p;
+            if k == j {
+                pj = p;
+            }
+        }
         if s > 0.0 && s.is_finite() {
-            p[j] / s
+            pj / s
         } else {
             // Far outside every component: the nearest mean takes it (the highest for x above all).
             let near = (0..self.means.len())
