@@ -17,9 +17,10 @@
 //!
 //! EM details: deterministic initialisation (means spread evenly over the value range, at
 //! min + (j + ½)/K · (max − min); equal weights; variance = overall variance / K — quantiles would
-//! put every initial mean on the background of a mostly untouched image), variance floor (so that constant
-//! images and exactly repeated values do not produce singular components), stop when the mean
-//! log-likelihood improves by less than `tolerance` or after `max_iterations`.
+//! put every initial mean on the background of a mostly untouched image), variance floor (so that
+//! constant images and exactly repeated values do not produce singular components), stop when the
+//! mean log-likelihood improves by less than `tolerance` (default 1e-5) or after `max_iterations`
+//! (default 100).
 
 use super::layout::{IMAGE_COLS, IMAGE_ROWS, SensorLayout};
 use super::tactile_image::TactileImage;
