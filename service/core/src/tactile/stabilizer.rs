@@ -25,7 +25,7 @@ use super::pid::{Pid, PidGains};
 use super::tactile_image::TactileImage;
 use super::taring::{Tare, TareConfig};
 use crate::error::FieldError;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Most fingers a session may have.
 pub const MAX_FINGERS: usize = 16;
@@ -164,8 +164,10 @@ impl StabilizerConfig {
     }
 }
 
-/// One finger's reading in a frame (raw sensor units).
-#[derive(Debug, Clone, PartialEq, Default)]
+/// One finger's reading in a frame (raw sensor units). JSON: `{"pdc": …, "pac": [...], "tdc": …,
+/// "tac": …, "electrodes": [...]}`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FingerReading {
     pub pdc: f64,
     /// One value, or the 22 samples a BioTac driver delivers per frame.
@@ -176,7 +178,8 @@ pub struct FingerReading {
 }
 
 /// One frame: a timestamp (s) and one reading per session finger, in session order.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Frame {
     pub timestamp: f64,
     pub fingers: Vec<FingerReading>,
@@ -625,6 +628,19 @@ mod tests {
         assert_eq!(
             e.to_string(),
             "frames[2].fingers[0].electrodes: 19 values, layout biotac_sp has 24"
+        );
+    }
+
+    #[test]
+    fn frames_read_from_json() {
+        let f: Frame = serde_json::from_str(
+            r#"{"timestamp": 1.5, "fingers": [{"pdc": 1, "pac": [2], "tdc": 3, "tac": 4,
+                "electrodes": [5, 6]}]}"#,
+        )
+        .unwrap();
+        assert_eq!(f.fingers[0].electrodes, vec![5.0, 6.0]);
+        assert!(
+            serde_json::from_str::<Frame>(r#"{"timestamp": 1, "fingers": [], "x": 1}"#).is_err()
         );
     }
 
