@@ -67,6 +67,7 @@ impl Server {
             "GRASPD_MAX_MESSAGE_BYTES",
             "GRASPD_MAX_POINTS",
             "GRASPD_MAX_CONCURRENT_PLANS",
+            "GRASPD_MAX_TACTILE_SESSIONS",
             "GRASPD_LOG_FORMAT",
         ] {
             command.env_remove(var);

@@ -4,7 +4,6 @@ use graspd::grpc::convert::hand_from_proto;
 use graspd_core::HandDescription;
 use graspd_e2e::{Server, http, rest_error};
 use graspd_proto::v1 as pb;
-use graspd_proto::v1::tactile_stabilizer_client::TactileStabilizerClient;
 use tonic::Code;
 
 #[tokio::test]
@@ -109,24 +108,8 @@ async fn unimplemented_capabilities_say_so() {
         e.message()
     );
 
-    let mut tactile = TactileStabilizerClient::connect(server.grpc_url())
-        .await
-        .unwrap();
-    let frames = tokio_stream_once(pb::TactileFrame::default());
-    let e = tactile.stabilize(frames).await.unwrap_err();
-    assert_eq!(e.code(), Code::Unimplemented);
-    assert!(
-        e.message().contains("not implemented yet"),
-        "{}",
-        e.message()
-    );
-
     let client = http();
-    for (method, path) in [
-        ("POST", "/v1/hands"),
-        ("GET", "/v1/stabilize"),
-        ("POST", "/v1/tactile/analyze"),
-    ] {
+    for (method, path) in [("POST", "/v1/hands"), ("GET", "/v1/stabilize")] {
         let request = match method {
             "POST" => client
                 .post(server.rest_url(path))
@@ -163,11 +146,4 @@ async fn health_and_unknown_routes() {
     let (status, code, _, message) = rest_error(response).await;
     assert_eq!((status, code.as_str()), (404, "not_found"));
     assert!(message.contains("/v2/nothing"));
-}
-
-/// A one-item request stream without pulling in tokio-stream.
-fn tokio_stream_once(
-    frame: pb::TactileFrame,
-) -> impl tonic::codegen::tokio_stream::Stream<Item = pb::TactileFrame> + Send + 'static {
-    tonic::codegen::tokio_stream::iter([frame])
 }

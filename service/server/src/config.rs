@@ -36,6 +36,9 @@ pub struct Cli {
     /// Plans computed at once; further requests wait [default: number of CPUs].
     #[arg(long, env = "GRASPD_MAX_CONCURRENT_PLANS", value_name = "N")]
     pub max_concurrent_plans: Option<usize>,
+    /// Tactile sessions open at once (streams and analyze calls); more are refused [default: 64].
+    #[arg(long, env = "GRASPD_MAX_TACTILE_SESSIONS", value_name = "N")]
+    pub max_tactile_sessions: Option<usize>,
     /// Log filter in tracing's EnvFilter syntax, e.g. `info` or `graspd=debug` [default: info].
     #[arg(long, env = "GRASPD_LOG", value_name = "FILTER")]
     pub log: Option<String>,
@@ -66,6 +69,7 @@ pub struct FileConfig {
     pub max_message_bytes: Option<usize>,
     pub max_points: Option<usize>,
     pub max_concurrent_plans: Option<usize>,
+    pub max_tactile_sessions: Option<usize>,
     pub log: Option<String>,
     pub log_format: Option<LogFormat>,
 }
@@ -78,6 +82,7 @@ pub struct Settings {
     pub max_message_bytes: usize,
     pub max_points: usize,
     pub max_concurrent_plans: usize,
+    pub max_tactile_sessions: usize,
     pub log: String,
     pub log_format: LogFormat,
 }
@@ -133,6 +138,10 @@ impl Settings {
                 .max_concurrent_plans
                 .or(file.max_concurrent_plans)
                 .unwrap_or(d.max_concurrent_plans),
+            max_tactile_sessions: cli
+                .max_tactile_sessions
+                .or(file.max_tactile_sessions)
+                .unwrap_or(d.max_tactile_sessions),
             log: cli
                 .log
                 .clone()
@@ -163,6 +172,12 @@ impl Settings {
                 message: "must be at least 1".into(),
             });
         }
+        if self.max_tactile_sessions == 0 {
+            return Err(ConfigError::Invalid {
+                field: "max_tactile_sessions",
+                message: "must be at least 1".into(),
+            });
+        }
         Ok(())
     }
 
@@ -171,6 +186,7 @@ impl Settings {
             max_message_bytes: self.max_message_bytes,
             max_points: self.max_points,
             max_concurrent_plans: self.max_concurrent_plans,
+            max_tactile_sessions: self.max_tactile_sessions,
         }
     }
 }

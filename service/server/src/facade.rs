@@ -3,6 +3,10 @@
 //! tonic, axum, tokio or proto types), so it also serves as the library entry point.
 
 use graspd_core::cloud::{Plane, PointCloud};
+use graspd_core::tactile::{
+    FingerConfig, Frame, FrameResult, LayoutSpec, SensorCatalog, SensorLayout, Stabilizer,
+    StabilizerConfig, TareConfig,
+};
 use graspd_core::{
     FieldError, GraspPlan, HandCatalog, HandDescription, PlanError, PlanHints, PlanInput,
     PlannerOptions,
@@ -10,6 +14,7 @@ use graspd_core::{
 use nalgebra::Point3;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use thiserror::Error;
 
 /// Limits on untrusted input, enforced by the transports (bytes) and by the facade (points).
@@ -21,7 +26,13 @@ pub struct Limits {
     pub max_points: usize,
     /// Plans computed at once; more wait (planning is CPU-bound).
     pub max_concurrent_plans: usize,
+    /// Tactile sessions open at once (streams and analyze calls); more are refused
+    /// (RESOURCE_EXHAUSTED, 503).
+    pub max_tactile_sessions: usize,
 }
+
+/// Default of [`Limits::max_tactile_sessions`].
+pub const DEFAULT_MAX_TACTILE_SESSIONS: usize = 64;
 
 impl Default for Limits {
     fn default() -> Self {
@@ -29,6 +40,7 @@ impl Default for Limits {
             max_message_bytes: 32 * 1024 * 1024,
             max_points: 500_000,
             max_concurrent_plans: std::thread::available_parallelism().map_or(2, |n| n.get()),
+            max_tactile_sessions: DEFAULT_MAX_TACTILE_SESSIONS,
         }
     }
 }
@@ -88,6 +100,9 @@ pub enum ServiceError {
     /// Input over a configured limit (RESOURCE_EXHAUSTED, 413).
     #[error(transparent)]
     TooLarge(FieldError),
+    /// A configured capacity is used up, retry later (RESOURCE_EXHAUSTED, 503).
+    #[error("{0}")]
+    Exhausted(String),
     /// Valid but not implemented yet (UNIMPLEMENTED, 501).
     #[error("{0}")]
     Unimplemented(String),
@@ -132,13 +147,21 @@ pub struct GraspService {
 #[derive(Debug)]
 struct Inner {
     catalog: HandCatalog,
+    sensors: SensorCatalog,
     limits: Limits,
+    /// Tactile sessions open now.
+    tactile_sessions: Arc<AtomicUsize>,
 }
 
 impl GraspService {
     pub fn new(catalog: HandCatalog, limits: Limits) -> Self {
         Self {
-            inner: Arc::new(Inner { catalog, limits }),
+            inner: Arc::new(Inner {
+                catalog,
+                sensors: SensorCatalog::builtin(),
+                limits,
+                tactile_sessions: Arc::new(AtomicUsize::new(0)),
+            }),
         }
     }
 
@@ -263,6 +286,179 @@ impl GraspService {
                 self.inner.catalog.names().join(", ")
             ),
         )
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tactile stabilization
+
+/// A finger's sensor layout as the transports receive it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LayoutChoice {
+    /// A built-in layout (`biotac`, `biotac_sp`).
+    Name(String),
+    /// Electrode coordinates, validated like the data files.
+    Custom(LayoutSpec),
+}
+
+/// One finger of a session request.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TactileFingerRequest {
+    pub name: String,
+    pub layout: LayoutChoice,
+    pub tare: TareConfig,
+}
+
+/// A session request in domain terms, as both transports produce it: `config` holds every
+/// parameter except the fingers, whose layouts the facade resolves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TactileSessionRequest {
+    pub fingers: Vec<TactileFingerRequest>,
+    pub config: StabilizerConfig,
+}
+
+/// An open tactile session: a [`Stabilizer`] holding one of the `max_tactile_sessions` slots,
+/// released when this is dropped (e.g. the moment a stream's client disconnects).
+#[derive(Debug)]
+pub struct TactileSession {
+    stabilizer: Stabilizer,
+    _slot: SessionSlot,
+}
+
+#[derive(Debug)]
+struct SessionSlot(Arc<AtomicUsize>);
+
+impl Drop for SessionSlot {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+impl TactileSession {
+    /// Processes one frame. A frame that does not fit the session (finger or electrode count,
+    /// out-of-order timestamp, non-finite value) is `InvalidArgument` naming `frame.…` and
+    /// changes nothing.
+    pub fn step(&mut self, frame: &Frame) -> Result<FrameResult, ServiceError> {
+        let stabilizer = &mut self.stabilizer;
+        guarded("the stabilizer", || {
+            stabilizer.step(frame).map_err(ServiceError::from)
+        })
+    }
+
+    /// Frames accepted so far.
+    pub fn frames(&self) -> u64 {
+        self.stabilizer.frames()
+    }
+
+    pub fn config(&self) -> &StabilizerConfig {
+        self.stabilizer.config()
+    }
+}
+
+impl GraspService {
+    /// Resolves the layouts and validates the parameters (errors name `session.…`).
+    pub fn tactile_config(
+        &self,
+        request: TactileSessionRequest,
+    ) -> Result<StabilizerConfig, ServiceError> {
+        let mut config = request.config;
+        config.fingers = request
+            .fingers
+            .into_iter()
+            .enumerate()
+            .map(|(i, f)| {
+                let field = format!("session.fingers[{i}].layout");
+                let layout = match f.layout {
+                    LayoutChoice::Name(name) => {
+                        self.inner.sensors.get(&name).cloned().ok_or_else(|| {
+                            FieldError::new(
+                                &field,
+                                format!(
+                                    "unknown layout '{}' (built-in: {}; or give the electrode coordinates)",
+                                    name.escape_debug(),
+                                    self.inner.sensors.names().join(", ")
+                                ),
+                            )
+                        })?
+                    }
+                    LayoutChoice::Custom(spec) => SensorLayout::from_spec(spec).map_err(|e| {
+                        let rest = e.field.strip_prefix("layout").unwrap_or("");
+                        FieldError::new(format!("{field}{rest}"), e.message)
+                    })?,
+                };
+                Ok(FingerConfig {
+                    name: f.name,
+                    layout,
+                    tare: f.tare,
+                })
+            })
+            .collect::<Result<_, FieldError>>()?;
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// Opens a session (one slot of `max_tactile_sessions`; `Exhausted` when none is free).
+    pub fn open_tactile_session(
+        &self,
+        request: TactileSessionRequest,
+    ) -> Result<TactileSession, ServiceError> {
+        let config = self.tactile_config(request)?;
+        let stabilizer = Stabilizer::new(config)?;
+        let slot = self.take_tactile_slot()?;
+        Ok(TactileSession {
+            stabilizer,
+            _slot: slot,
+        })
+    }
+
+    /// Runs a whole recorded sequence through a fresh session: one result per frame; errors name
+    /// the frame (`frames[12].fingers[0].electrodes`). Holds a session slot while it runs.
+    /// Blocking and CPU-bound.
+    pub fn analyze_tactile(
+        &self,
+        request: TactileSessionRequest,
+        frames: &[Frame],
+    ) -> Result<Vec<FrameResult>, ServiceError> {
+        let config = self.tactile_config(request)?;
+        let _slot = self.take_tactile_slot()?;
+        guarded("the stabilizer", || {
+            graspd_core::tactile::analyze(config, frames).map_err(ServiceError::from)
+        })
+    }
+
+    /// Tactile sessions open now.
+    pub fn tactile_sessions_open(&self) -> usize {
+        self.inner.tactile_sessions.load(Ordering::Acquire)
+    }
+
+    fn take_tactile_slot(&self) -> Result<SessionSlot, ServiceError> {
+        let max = self.inner.limits.max_tactile_sessions;
+        let count = &self.inner.tactile_sessions;
+        count
+            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| {
+                (n < max).then_some(n + 1)
+            })
+            .map_err(|_| {
+                ServiceError::Exhausted(format!(
+                    "{max} tactile sessions are open, the configured limit (max_tactile_sessions); retry when one has closed"
+                ))
+            })?;
+        Ok(SessionSlot(count.clone()))
+    }
+}
+
+/// Runs `f`, turning a panic into `Internal` so that one bad input cannot take a task down.
+fn guarded<T>(what: &str, f: impl FnOnce() -> Result<T, ServiceError>) -> Result<T, ServiceError> {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(r) => r,
+        Err(panic) => {
+            let msg = panic
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| panic.downcast_ref::<&str>().copied())
+                .unwrap_or("unknown panic");
+            Err(ServiceError::Internal(format!("{what} failed: {msg}")))
+        }
     }
 }
 
@@ -529,5 +725,72 @@ mod tests {
         let mut r = request("shadow");
         r.image_hints.most_salient = true;
         assert!(matches!(s.prepare(r), Err(ServiceError::Unimplemented(_))));
+    }
+
+    fn tactile_request(layout: LayoutChoice) -> TactileSessionRequest {
+        TactileSessionRequest {
+            fingers: vec![TactileFingerRequest {
+                name: "th".into(),
+                layout,
+                tare: TareConfig::pretared(),
+            }],
+            config: StabilizerConfig::default(),
+        }
+    }
+
+    #[test]
+    fn tactile_sessions_are_limited_and_free_their_slot_on_drop() {
+        let s = GraspService::builtin(Limits {
+            max_tactile_sessions: 2,
+            ..Limits::default()
+        });
+        let biotac = || tactile_request(LayoutChoice::Name("biotac".into()));
+        let a = s.open_tactile_session(biotac()).unwrap();
+        let _b = s.open_tactile_session(biotac()).unwrap();
+        assert_eq!(s.tactile_sessions_open(), 2);
+        let e = s.open_tactile_session(biotac()).unwrap_err();
+        assert!(matches!(&e, ServiceError::Exhausted(m) if m.contains("max_tactile_sessions")));
+        assert!(matches!(
+            s.analyze_tactile(biotac(), &[]),
+            Err(ServiceError::Exhausted(_))
+        ));
+        drop(a);
+        assert_eq!(s.tactile_sessions_open(), 1);
+        assert!(s.analyze_tactile(biotac(), &[]).unwrap().is_empty());
+        assert_eq!(s.tactile_sessions_open(), 1);
+        // A refused (invalid) session takes no slot.
+        let e = s
+            .open_tactile_session(tactile_request(LayoutChoice::Name("nope".into())))
+            .unwrap_err();
+        assert_eq!(e.field(), Some("session.fingers[0].layout"));
+        assert_eq!(s.tactile_sessions_open(), 1);
+    }
+
+    #[test]
+    fn tactile_layouts_resolve_by_name_or_coordinates() {
+        let s = GraspService::builtin(Limits::default());
+        let c = s
+            .tactile_config(tactile_request(LayoutChoice::Name("biotac_sp".into())))
+            .unwrap();
+        assert_eq!(c.fingers[0].layout.electrode_count(), 24);
+        let spec = |electrodes: Vec<[f64; 2]>| {
+            LayoutChoice::Custom(LayoutSpec {
+                name: "pad".into(),
+                description: String::new(),
+                electrodes,
+            })
+        };
+        let c = s
+            .tactile_config(tactile_request(spec(vec![
+                [0.0, 0.0],
+                [1.0, 0.0],
+                [0.0, 1.0],
+            ])))
+            .unwrap();
+        assert_eq!(c.fingers[0].layout.electrode_count(), 3);
+        let e = s
+            .tactile_config(tactile_request(spec(vec![[0.0, 0.0], [f64::NAN, 0.0]])))
+            .unwrap_err();
+        assert_eq!(e.field(), Some("session.fingers[0].layout.electrodes[1]"));
     }
 }

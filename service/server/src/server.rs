@@ -75,6 +75,7 @@ pub async fn run(
         max_message_bytes = settings.max_message_bytes,
         max_points = settings.max_points,
         max_concurrent_plans = settings.max_concurrent_plans,
+        max_tactile_sessions = settings.max_tactile_sessions,
         "graspd listening"
     );
 

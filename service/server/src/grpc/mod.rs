@@ -21,10 +21,12 @@ pub async fn serve(
     shutdown: impl Future<Output = ()> + Send,
 ) -> Result<(), tonic::transport::Error> {
     let limit = runner.service().limits().max_message_bytes;
-    let planner = GraspPlannerServer::new(grasp_planner::GraspPlannerService::new(runner))
+    let planner = GraspPlannerServer::new(grasp_planner::GraspPlannerService::new(runner.clone()))
         .max_decoding_message_size(limit);
-    let tactile = TactileStabilizerServer::new(tactile_stabilizer::TactileStabilizerService)
-        .max_decoding_message_size(limit);
+    let tactile = TactileStabilizerServer::new(tactile_stabilizer::TactileStabilizerService::new(
+        runner.service().clone(),
+    ))
+    .max_decoding_message_size(limit);
     let (health_reporter, health) = tonic_health::server::health_reporter();
     health_reporter
         .set_serving::<GraspPlannerServer<grasp_planner::GraspPlannerService>>()

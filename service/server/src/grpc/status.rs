@@ -13,6 +13,7 @@ pub fn to_status(e: ServiceError) -> Status {
         ServiceError::InvalidArgument(_) => Code::InvalidArgument,
         ServiceError::NotFound(_) => Code::NotFound,
         ServiceError::TooLarge(_) => Code::ResourceExhausted,
+        ServiceError::Exhausted(_) => Code::ResourceExhausted,
         ServiceError::Unimplemented(_) => Code::Unimplemented,
         ServiceError::Internal(_) => Code::Internal,
     };

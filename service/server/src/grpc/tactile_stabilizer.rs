@@ -1,16 +1,44 @@
-//! The `graspd.v1.TactileStabilizer` service. Not implemented yet: it answers UNIMPLEMENTED with
-//! a message instead of tonic's generic one.
+//! The `graspd.v1.TactileStabilizer` service: one bidirectional stream per session.
+//!
+//! The first message opens the session through the facade (a slot of `max_tactile_sessions`);
+//! each later frame gets exactly one setpoint. A task per stream reads a frame, steps the session
+//! and waits until the answer fits into a bounded channel ([`SESSION_QUEUE`]) before it reads the
+//! next frame: a slow reader stops the reading (HTTP/2 flow control then stops the client), so
+//! server memory does not grow. A bad frame ends the stream with INVALID_ARGUMENT naming the
+//! field. When the client goes away the response stream is dropped, the task notices at once
+//! (even while it waits for a frame) and the session, with its slot, is dropped.
 
+use super::convert;
+use super::status::to_status;
+use crate::facade::{GraspService, ServiceError};
+use graspd_core::FieldError;
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::tactile_stabilizer_server::TactileStabilizer;
 use std::pin::Pin;
+use tokio::sync::mpsc;
 use tokio_stream::Stream;
+use tokio_stream::wrappers::ReceiverStream;
 use tonic::{Request, Response, Status, Streaming};
 
-#[derive(Debug, Default)]
-pub struct TactileStabilizerService;
+/// Answers buffered per session before the server stops reading frames.
+pub const SESSION_QUEUE: usize = 16;
+
+#[derive(Debug, Clone)]
+pub struct TactileStabilizerService {
+    service: GraspService,
+}
+
+impl TactileStabilizerService {
+    pub fn new(service: GraspService) -> Self {
+        Self { service }
+    }
+}
 
 type SetpointStream = Pin<Box<dyn Stream<Item = Result<pb::StabilizationSetpoint, Status>> + Send>>;
+
+fn invalid(e: FieldError) -> Status {
+    to_status(ServiceError::InvalidArgument(e))
+}
 
 #[tonic::async_trait]
 impl TactileStabilizer for TactileStabilizerService {
@@ -18,10 +46,50 @@ impl TactileStabilizer for TactileStabilizerService {
 
     async fn stabilize(
         &self,
-        _request: Request<Streaming<pb::TactileFrame>>,
+        request: Request<Streaming<pb::StabilizeRequest>>,
     ) -> Result<Response<Self::StabilizeStream>, Status> {
-        Err(Status::unimplemented(
-            "tactile stabilisation is not implemented yet; plan grasps with GraspPlanner.PlanGrasp",
-        ))
+        let mut inbound = request.into_inner();
+        let first = inbound.message().await?.ok_or_else(|| {
+            invalid(FieldError::new(
+                "session",
+                "the stream ended before the session was opened",
+            ))
+        })?;
+        let session_request = convert::stabilize_session_from_proto(first).map_err(invalid)?;
+        let mut session = self
+            .service
+            .open_tactile_session(session_request)
+            .map_err(to_status)?;
+        tracing::debug!(
+            fingers = session.config().fingers.len(),
+            "tactile session opened"
+        );
+        let (tx, rx) = mpsc::channel(SESSION_QUEUE);
+        tokio::spawn(async move {
+            loop {
+                let message = tokio::select! {
+                    () = tx.closed() => break,
+                    m = inbound.message() => m,
+                };
+                let message = match message {
+                    Ok(Some(m)) => m,
+                    // The client finished sending, or the connection failed.
+                    Ok(None) | Err(_) => break,
+                };
+                let index = session.frames();
+                let answer = convert::stabilize_frame_from_proto(message)
+                    .map_err(ServiceError::from)
+                    .and_then(|frame| session.step(&frame))
+                    .map(|r| convert::setpoint_to_proto(&r, index))
+                    .map_err(to_status);
+                let failed = answer.is_err();
+                if tx.send(answer).await.is_err() || failed {
+                    break;
+                }
+            }
+            tracing::debug!(frames = session.frames(), "tactile session closed");
+            drop(session);
+        });
+        Ok(Response::new(Box::pin(ReceiverStream::new(rx))))
     }
 }

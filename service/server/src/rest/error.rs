@@ -53,6 +53,9 @@ impl From<ServiceError> for ApiError {
             ServiceError::InvalidArgument(f) => Self::invalid(f),
             ServiceError::NotFound(f) => Self::with_field(StatusCode::NOT_FOUND, "not_found", f),
             ServiceError::TooLarge(f) => Self::too_large(f),
+            ServiceError::Exhausted(m) => {
+                Self::new(StatusCode::SERVICE_UNAVAILABLE, "resource_exhausted", m)
+            }
             ServiceError::Unimplemented(m) => Self::not_implemented(m),
             ServiceError::Internal(m) => {
                 Self::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", m)

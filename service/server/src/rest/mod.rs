@@ -5,6 +5,7 @@ pub mod error;
 pub mod hands;
 pub mod json;
 pub mod plan;
+pub mod tactile;
 
 use crate::runner::PlanRunner;
 use axum::extract::DefaultBodyLimit;
@@ -24,7 +25,7 @@ pub fn router(runner: PlanRunner) -> Router {
         .route("/v1/hands", get(hands::list).post(hands::register))
         .route("/v1/hands/{name}", get(hands::get))
         .route("/v1/stabilize", get(stabilize))
-        .route("/v1/tactile/analyze", post(tactile_analyze))
+        .route("/v1/tactile/analyze", post(tactile::analyze))
         .route("/healthz", get(health))
         .route("/readyz", get(health))
         .fallback(not_found)
@@ -51,10 +52,6 @@ async fn stabilize() -> ApiError {
     ApiError::not_implemented(
         "tactile stabilisation (WebSocket) is not implemented yet; plan grasps with POST /v1/plan",
     )
-}
-
-async fn tactile_analyze() -> ApiError {
-    ApiError::not_implemented("analysing recorded tactile sequences is not implemented yet")
 }
 
 async fn not_found(method: Method, uri: Uri) -> ApiError {

@@ -50,7 +50,7 @@ pub async fn plan(
 }
 
 /// A body that could not be read: over the limit (413) or broken (400).
-fn body_error(status: StatusCode, text: String, limits: &Limits) -> ApiError {
+pub(crate) fn body_error(status: StatusCode, text: String, limits: &Limits) -> ApiError {
     if status == StatusCode::PAYLOAD_TOO_LARGE {
         ApiError::too_large(FieldError::new(
             "body",

@@ -1,0 +1,140 @@
+//! `POST /v1/tactile/analyze`: a whole recorded sequence through a fresh stabilization session,
+//! one result per frame (the same results as the `Stabilize` stream for the same frames).
+//!
+//! The body is one of
+//! * `application/json`: `{"session": {…}, "frames": [{"timestamp", "fingers": [{"pdc", "pac",
+//!   "tdc", "tac", "electrodes"}]}]}` (the proto's TactileSession and TactileFrame in JSON);
+//! * `text/csv`: a `_bio.csv` recording (`timestamp,tdc,tac,pdc,pac1..pac22,ele1..eleN`) of one
+//!   finger, with the session in the query string: `finger`, `layout` (built-in, default
+//!   `biotac`), `pretared`, `baseline_frames`, `electrode_polarity`, `window_length`, `stride`,
+//!   `f0`, `delta_material`, `delta_slip`, `f_min`, `f_max`, `kp`, `ki`, `kd`, `alpha`,
+//!   `calibration_gain` — e.g. `curl --data-binary @mat5_1_bio.csv -H 'content-type: text/csv'
+//!   'localhost:8080/v1/tactile/analyze?pretared=true'`;
+//! * `multipart/form-data`: a file part `bio_csv` (the CSV above) and an optional JSON part
+//!   `session` (the full session; default one `biotac` finger with default taring).
+
+use super::error::ApiError;
+use super::json::{self, AnalyzeCsvQuery, AnalyzeRequestJson, AnalyzeResponseJson};
+use super::plan::body_error;
+use crate::facade::{Limits, ServiceError, TactileSessionRequest};
+use crate::runner::PlanRunner;
+use axum::Json;
+use axum::body::Bytes;
+use axum::extract::{FromRequest, Multipart, Query, Request, State};
+use axum::http::StatusCode;
+use axum::http::header::CONTENT_TYPE;
+use graspd_core::FieldError;
+use graspd_core::tactile::{Frame, Recording};
+
+pub async fn analyze(
+    State(runner): State<PlanRunner>,
+    request: Request,
+) -> Result<Json<AnalyzeResponseJson>, ApiError> {
+    let limits = *runner.service().limits();
+    let content_type = request
+        .headers()
+        .get(CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let (session, frames) = if content_type.starts_with("multipart/form-data") {
+        let multipart = Multipart::from_request(request, &())
+            .await
+            .map_err(|e| body_error(e.status(), e.body_text(), &limits))?;
+        from_multipart(multipart, &limits).await?
+    } else if content_type.starts_with("text/csv") {
+        let query = Query::<AnalyzeCsvQuery>::try_from_uri(request.uri())
+            .map_err(|e| ApiError::invalid(FieldError::new("query", e.body_text())))?
+            .0;
+        let bytes = Bytes::from_request(request, &())
+            .await
+            .map_err(|e| body_error(e.status(), e.body_text(), &limits))?;
+        (
+            json::tactile_session_from_json(query.session()),
+            frames_from_csv(&bytes, "body")?,
+        )
+    } else if content_type.is_empty() || content_type.starts_with("application/json") {
+        let bytes = Bytes::from_request(request, &())
+            .await
+            .map_err(|e| body_error(e.status(), e.body_text(), &limits))?;
+        let body: AnalyzeRequestJson = json::parse(&bytes, "body")?;
+        (
+            json::tactile_session_from_json(body.session),
+            body.frames
+                .into_iter()
+                .map(json::tactile_frame_from_json)
+                .collect(),
+        )
+    } else {
+        return Err(ApiError::new(
+            StatusCode::UNSUPPORTED_MEDIA_TYPE,
+            "unsupported_media_type",
+            format!(
+                "content type '{content_type}' is not supported; send application/json, text/csv (a _bio.csv recording, session in the query) or multipart/form-data (parts bio_csv and session)"
+            ),
+        ));
+    };
+    let service = runner.service().clone();
+    let results = tokio::task::spawn_blocking(move || service.analyze_tactile(session, &frames))
+        .await
+        .unwrap_or_else(|e| Err(ServiceError::Internal(format!("analyze task failed: {e}"))))?;
+    Ok(Json(AnalyzeResponseJson {
+        frame_count: results.len(),
+        frames: results,
+    }))
+}
+
+fn frames_from_csv(bytes: &[u8], field: &str) -> Result<Vec<Frame>, ApiError> {
+    let text = std::str::from_utf8(bytes)
+        .map_err(|e| ApiError::invalid(FieldError::new(field, format!("not UTF-8 text: {e}"))))?;
+    let recording = Recording::from_csv(text, None, None)?;
+    Ok(recording.frames())
+}
+
+async fn from_multipart(
+    mut multipart: Multipart,
+    limits: &Limits,
+) -> Result<(TactileSessionRequest, Vec<Frame>), ApiError> {
+    let mut frames = None;
+    let mut session = None;
+    while let Some(field) = multipart
+        .next_field()
+        .await
+        .map_err(|e| body_error(e.status(), e.body_text(), limits))?
+    {
+        let name = field.name().unwrap_or("").to_string();
+        let bytes = field
+            .bytes()
+            .await
+            .map_err(|e| body_error(e.status(), e.body_text(), limits))?;
+        match name.as_str() {
+            "bio_csv" if frames.is_none() => frames = Some(frames_from_csv(&bytes, "bio_csv")?),
+            "session" if session.is_none() => {
+                session = Some(json::parse::<json::TactileSessionJson>(&bytes, "session")?)
+            }
+            "bio_csv" | "session" => {
+                return Err(ApiError::invalid(FieldError::new(
+                    name.clone(),
+                    format!("the part '{name}' is given twice"),
+                )));
+            }
+            other => {
+                return Err(ApiError::invalid(FieldError::new(
+                    "multipart",
+                    format!(
+                        "unknown part '{}' (expected a file part 'bio_csv' and an optional JSON part 'session')",
+                        other.escape_debug()
+                    ),
+                )));
+            }
+        }
+    }
+    let Some(frames) = frames else {
+        return Err(ApiError::invalid(FieldError::new(
+            "bio_csv",
+            "the multipart upload has no file part named 'bio_csv'",
+        )));
+    };
+    let session = session.unwrap_or_else(|| AnalyzeCsvQuery::default().session());
+    Ok((json::tactile_session_from_json(session), frames))
+}
