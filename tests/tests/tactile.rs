@@ -1,0 +1,365 @@
+//! Tactile stabilization end to end (issue 5): a real BioTac recording streamed over gRPC gets
+//! one setpoint per frame, `POST /v1/tactile/analyze` (CSV and JSON) gives the same results, bad
+//! sessions and frames end the stream with INVALID_ARGUMENT naming the field, and the session
+//! limit refuses the extra session and frees the slot the moment a client disconnects.
+
+use graspd::facade::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
+use graspd::grpc::convert;
+use graspd_core::tactile::{Frame, Recording, StabilizerConfig, TareConfig};
+use graspd_e2e::{Server, http, rest_error};
+use graspd_proto::v1 as pb;
+use graspd_proto::v1::stabilize_request::Kind;
+use graspd_proto::v1::tactile_stabilizer_client::TactileStabilizerClient;
+use std::time::{Duration, Instant};
+use tokio::sync::mpsc;
+use tonic::codegen::tokio_stream::wrappers::ReceiverStream;
+use tonic::{Code, Status, Streaming};
+
+const RECORDING: &str = "tactile/biotac_slide/mat5/mat5_1_bio.csv";
+
+fn recording_text() -> String {
+    let path = graspd_testkit::testdata_dir().join(RECORDING);
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
+}
+
+fn recording_frames() -> Vec<Frame> {
+    Recording::from_csv(&recording_text(), None, None)
+        .expect("the recording parses")
+        .frames()
+}
+
+/// One classic BioTac named `th`; the dexrob recordings are already tared.
+fn session() -> pb::TactileSession {
+    convert::tactile_session_to_proto(&TactileSessionRequest {
+        fingers: vec![TactileFingerRequest {
+            name: "th".into(),
+            layout: LayoutChoice::Name("biotac".into()),
+            tare: TareConfig::pretared(),
+        }],
+        config: StabilizerConfig::default(),
+    })
+}
+
+fn frame_message(f: &Frame) -> pb::StabilizeRequest {
+    pb::StabilizeRequest {
+        kind: Some(Kind::Frame(convert::tactile_frame_to_proto(f))),
+    }
+}
+
+type Open = (
+    mpsc::Sender<pb::StabilizeRequest>,
+    Streaming<pb::StabilizationSetpoint>,
+);
+
+/// Opens a stream whose first message is `session`; Ok once the server has opened the session.
+async fn open(server: &Server, session: pb::TactileSession) -> Result<Open, Status> {
+    open_at(server.grpc_url(), session).await
+}
+
+async fn open_at(url: String, session: pb::TactileSession) -> Result<Open, Status> {
+    let mut client = TactileStabilizerClient::connect(url)
+        .await
+        .expect("connect to graspd's gRPC port");
+    let (tx, rx) = mpsc::channel(8);
+    tx.send(pb::StabilizeRequest {
+        kind: Some(Kind::Session(session)),
+    })
+    .await
+    .unwrap();
+    let response = client.stabilize(ReceiverStream::new(rx)).await?;
+    Ok((tx, response.into_inner()))
+}
+
+fn field_of(s: &Status) -> String {
+    s.metadata()
+        .get("graspd-field")
+        .and_then(|v| v.to_str().ok())
+        .unwrap_or("")
+        .to_string()
+}
+
+/// Sends `frames` one by one, reading each answer; returns the answers and the final error.
+async fn exchange(
+    (tx, mut rx): Open,
+    frames: &[Frame],
+) -> (Vec<pb::StabilizationSetpoint>, Option<Status>) {
+    let mut answers = Vec::new();
+    for f in frames {
+        if tx.send(frame_message(f)).await.is_err() {
+            break;
+        }
+        match rx.message().await {
+            Ok(Some(m)) => answers.push(m),
+            Ok(None) => return (answers, None),
+            Err(s) => return (answers, Some(s)),
+        }
+    }
+    drop(tx);
+    let end = rx.message().await;
+    (answers, end.err())
+}
+
+#[tokio::test]
+async fn grpc_stream_replays_a_real_recording_and_analyze_gives_the_same_results() {
+    let server = Server::start();
+    let frames = recording_frames();
+    assert!(frames.len() > 500, "{} frames", frames.len());
+
+    // Stream: a sender task pushes every frame while this task reads the answers.
+    let (tx, mut rx) = open(&server, session()).await.expect("session opens");
+    let sent = frames.clone();
+    let sender = tokio::spawn(async move {
+        for f in &sent {
+            tx.send(frame_message(f))
+                .await
+                .expect("the stream stays open");
+        }
+    });
+    let mut streamed = Vec::new();
+    while let Some(m) = rx.message().await.expect("no stream error") {
+        assert_eq!(m.frame_index, streamed.len() as u64);
+        assert_eq!(m.timestamp, frames[streamed.len()].timestamp);
+        assert_eq!(m.fingers.len(), 1);
+        assert_eq!(m.fingers[0].finger, "th");
+        streamed.push(m);
+    }
+    sender.await.unwrap();
+    assert_eq!(streamed.len(), frames.len(), "one setpoint per frame");
+    let in_contact = streamed
+        .iter()
+        .filter(|m| m.fingers[0].event != pb::ContactEvent::NonContact as i32)
+        .count();
+    assert!(
+        in_contact > 0,
+        "the recording presses the sensor; no frame was in contact"
+    );
+    assert!(
+        streamed
+            .iter()
+            .any(|m| m.fingers[0].mode == pb::ControlMode::Force as i32
+                && m.fingers[0].setpoint.is_some())
+    );
+    let streamed: Vec<serde_json::Value> = streamed
+        .into_iter()
+        .map(|m| serde_json::to_value(convert::setpoint_from_proto(m).unwrap()).unwrap())
+        .collect();
+
+    // Analyze, the recording as text/csv with the session in the query.
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze?pretared=true&finger=th&layout=biotac"))
+        .header("content-type", "text/csv")
+        .body(recording_text())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    let body: serde_json::Value = response.json().await.unwrap();
+    assert_eq!(body["frame_count"], frames.len());
+    let analyzed = body["frames"].as_array().unwrap();
+    assert_eq!(analyzed.len(), frames.len());
+    for (i, (a, s)) in analyzed.iter().zip(&streamed).enumerate() {
+        assert_eq!(a, s, "frame {i}: analyze and the stream differ");
+    }
+
+    // Analyze, the same recording as JSON.
+    let json_frames: Vec<serde_json::Value> = frames
+        .iter()
+        .map(|f| {
+            let r = &f.fingers[0];
+            serde_json::json!({"timestamp": f.timestamp, "fingers": [{
+                "pdc": r.pdc, "pac": r.pac, "tdc": r.tdc, "tac": r.tac, "electrodes": r.electrodes,
+            }]})
+        })
+        .collect();
+    let request = serde_json::json!({
+        "session": {"fingers": [{"name": "th", "layout": "biotac", "tare": {"pretared": true}}]},
+        "frames": json_frames,
+    });
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze"))
+        .json(&request)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    let body: serde_json::Value = response.json().await.unwrap();
+    assert_eq!(body["frames"].as_array().unwrap(), &streamed);
+}
+
+#[tokio::test]
+async fn bad_sessions_and_frames_end_the_stream_naming_the_field() {
+    let server = Server::start();
+    let frames = recording_frames();
+    let good = &frames[..3];
+
+    // Mismatched electrode count.
+    let mut short = good[2].clone();
+    short.fingers[0].electrodes.pop();
+    let open1 = open(&server, session()).await.unwrap();
+    let (answers, end) = exchange(open1, &[good[0].clone(), good[1].clone(), short]).await;
+    assert_eq!(answers.len(), 2);
+    let e = end.expect("the stream ends with an error");
+    assert_eq!(e.code(), Code::InvalidArgument, "{e:?}");
+    assert_eq!(field_of(&e), "frame.fingers[0].electrodes");
+    assert!(
+        e.message()
+            .contains("frame.fingers[0].electrodes: 18 values, layout biotac has 19"),
+        "{}",
+        e.message()
+    );
+
+    // Wrong finger count.
+    let mut two = good[1].clone();
+    two.fingers.push(two.fingers[0].clone());
+    let (answers, end) = exchange(
+        open(&server, session()).await.unwrap(),
+        &[good[0].clone(), two],
+    )
+    .await;
+    assert_eq!(answers.len(), 1);
+    let e = end.unwrap();
+    assert_eq!(e.code(), Code::InvalidArgument);
+    assert_eq!(field_of(&e), "frame.fingers");
+    assert!(
+        e.message()
+            .contains("2 readings, the session has 1 fingers")
+    );
+
+    // Out-of-order timestamps.
+    let (answers, end) = exchange(
+        open(&server, session()).await.unwrap(),
+        &[good[1].clone(), good[0].clone()],
+    )
+    .await;
+    assert_eq!(answers.len(), 1);
+    let e = end.unwrap();
+    assert_eq!(e.code(), Code::InvalidArgument);
+    assert_eq!(field_of(&e), "frame.timestamp");
+    assert!(e.message().contains("out of order"), "{}", e.message());
+
+    // Bad sessions are refused before any frame.
+    let mut s = session();
+    s.fingers[0].layout = Some(pb::tactile_finger::Layout::LayoutName("biotac_xl".into()));
+    let e = open(&server, s).await.unwrap_err();
+    assert_eq!(e.code(), Code::InvalidArgument);
+    assert_eq!(field_of(&e), "session.fingers[0].layout");
+    assert!(e.message().contains("biotac, biotac_sp"), "{}", e.message());
+    let mut s = session();
+    s.stride = Some(0);
+    let e = open(&server, s).await.unwrap_err();
+    assert_eq!(field_of(&e), "session.stride");
+    let mut s = session();
+    s.fingers[0].layout = Some(pb::tactile_finger::Layout::CustomLayout(pb::CustomLayout {
+        name: "two".into(),
+        electrodes: vec![
+            pb::Electrode {
+                x_mm: 0.0,
+                y_mm: 0.0
+            };
+            2
+        ],
+    }));
+    let e = open(&server, s).await.unwrap_err();
+    assert_eq!(field_of(&e), "session.fingers[0].layout.electrodes[1]");
+
+    // A frame as the first message.
+    let mut client = TactileStabilizerClient::connect(server.grpc_url())
+        .await
+        .unwrap();
+    let first = tonic::codegen::tokio_stream::iter([frame_message(&good[0])]);
+    let e = client.stabilize(first).await.unwrap_err();
+    assert_eq!(e.code(), Code::InvalidArgument);
+    assert_eq!(field_of(&e), "session");
+
+    // The same faults through analyze name the frame.
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze"))
+        .json(&serde_json::json!({
+            "session": {"fingers": [{"name": "th", "layout": "biotac_sp"}]},
+            "frames": [{"timestamp": 0.0, "fingers": [{
+                "pdc": 0, "pac": 0, "tdc": 0, "tac": 0, "electrodes": vec![0.0; 19]}]}],
+        }))
+        .send()
+        .await
+        .unwrap();
+    let (status, code, field, message) = rest_error(response).await;
+    assert_eq!((status, code.as_str()), (400, "invalid_argument"));
+    assert_eq!(field.as_deref(), Some("frames[0].fingers[0].electrodes"));
+    assert!(message.contains("layout biotac_sp has 24"), "{message}");
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze?pretared=yes"))
+        .header("content-type", "text/csv")
+        .body(recording_text())
+        .send()
+        .await
+        .unwrap();
+    let (status, _, field, _) = rest_error(response).await;
+    assert_eq!((status, field.as_deref()), (400, Some("query")));
+}
+
+#[tokio::test]
+async fn the_session_limit_refuses_the_extra_session_and_frees_it_on_disconnect() {
+    let server = Server::start_with(&["--max-tactile-sessions", "1"]);
+    let frames = recording_frames();
+    // The first client runs on its own runtime, so that dropping the runtime cuts its connection
+    // mid-session like a crashed client (no clean end of the request stream).
+    let url = server.grpc_url();
+    let first = frames[0].clone();
+    let (opened_tx, opened_rx) = std::sync::mpsc::channel();
+    let (kill_tx, kill_rx) = std::sync::mpsc::channel::<()>();
+    let client = std::thread::spawn(move || {
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .unwrap();
+        let held = rt.block_on(async move {
+            let (tx, mut rx) = open_at(url, session()).await.expect("first session");
+            tx.send(frame_message(&first)).await.unwrap();
+            assert!(rx.message().await.unwrap().is_some());
+            (tx, rx)
+        });
+        opened_tx.send(()).unwrap();
+        let _ = kill_rx.recv();
+        drop(rt);
+        drop(held);
+    });
+    opened_rx.recv().unwrap();
+
+    let e = open(&server, session()).await.unwrap_err();
+    assert_eq!(e.code(), Code::ResourceExhausted, "{e:?}");
+    assert!(
+        e.message().contains("max_tactile_sessions"),
+        "{}",
+        e.message()
+    );
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze?pretared=true"))
+        .header("content-type", "text/csv")
+        .body(recording_text())
+        .send()
+        .await
+        .unwrap();
+    let (status, code, _, _) = rest_error(response).await;
+    assert_eq!((status, code.as_str()), (503, "resource_exhausted"));
+
+    // Disconnect.
+    kill_tx.send(()).unwrap();
+    client.join().unwrap();
+    let started = Instant::now();
+    let second = loop {
+        match open(&server, session()).await {
+            Ok(o) => break o,
+            Err(e) if e.code() == Code::ResourceExhausted => {
+                assert!(
+                    started.elapsed() < Duration::from_secs(5),
+                    "the slot was not freed after the disconnect"
+                );
+                tokio::time::sleep(Duration::from_millis(20)).await;
+            }
+            Err(e) => panic!("{e:?}"),
+        }
+    };
+    let (answers, end) = exchange(second, &frames[..2]).await;
+    assert_eq!(answers.len(), 2);
+    assert!(end.is_none(), "{end:?}");
+}
