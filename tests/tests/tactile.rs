@@ -363,3 +363,135 @@ async fn the_session_limit_refuses_the_extra_session_and_frees_it_on_disconnect(
     assert_eq!(answers.len(), 2);
     assert!(end.is_none(), "{end:?}");
 }
+
+mod websocket {
+    use super::*;
+    use futures_util::{SinkExt, StreamExt};
+    use tokio_tungstenite::tungstenite::Message;
+
+    type Ws = tokio_tungstenite::WebSocketStream<
+        tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>,
+    >;
+
+    async fn connect(server: &Server) -> Ws {
+        let url = format!("ws://{}/v1/stabilize", server.rest_addr);
+        tokio_tungstenite::connect_async(url)
+            .await
+            .expect("WebSocket handshake")
+            .0
+    }
+
+    async fn send(ws: &mut Ws, v: serde_json::Value) {
+        ws.send(Message::text(v.to_string())).await.unwrap();
+    }
+
+    async fn next_json(ws: &mut Ws) -> serde_json::Value {
+        loop {
+            match ws
+                .next()
+                .await
+                .expect("a message")
+                .expect("no socket error")
+            {
+                Message::Text(t) => return serde_json::from_str(t.as_str()).unwrap(),
+                Message::Ping(_) | Message::Pong(_) => continue,
+                other => panic!("unexpected {other:?}"),
+            }
+        }
+    }
+
+    fn session_json() -> serde_json::Value {
+        serde_json::json!({"fingers": [{"name": "th", "layout": "biotac", "tare": {"pretared": true}}]})
+    }
+
+    fn frame_json(f: &Frame) -> serde_json::Value {
+        let r = &f.fingers[0];
+        serde_json::json!({"frame": {"timestamp": f.timestamp, "fingers": [{
+            "pdc": r.pdc, "pac": r.pac, "tdc": r.tdc, "tac": r.tac, "electrodes": r.electrodes,
+        }]}})
+    }
+
+    #[tokio::test]
+    async fn websocket_session_replays_a_real_recording_like_analyze() {
+        let server = Server::start();
+        let frames = recording_frames();
+        let response = http()
+            .post(server.rest_url("/v1/tactile/analyze?pretared=true&finger=th"))
+            .header("content-type", "text/csv")
+            .body(recording_text())
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(response.status(), 200);
+        let analyzed: serde_json::Value = response.json().await.unwrap();
+
+        let mut ws = connect(&server).await;
+        send(&mut ws, serde_json::json!({"session": session_json()})).await;
+        for (i, f) in frames.iter().enumerate() {
+            send(&mut ws, frame_json(f)).await;
+            let mut answer = next_json(&mut ws).await;
+            assert_eq!(answer["frame_index"], i, "{answer}");
+            answer.as_object_mut().unwrap().remove("frame_index");
+            assert_eq!(answer, analyzed["frames"][i], "frame {i}");
+        }
+        ws.close(None).await.unwrap();
+    }
+
+    #[tokio::test]
+    async fn websocket_errors_name_the_field_and_close() {
+        let server = Server::start_with(&["--max-tactile-sessions", "1"]);
+        let frames = recording_frames();
+        let mut ws = connect(&server).await;
+        send(&mut ws, serde_json::json!({"session": session_json()})).await;
+        send(&mut ws, frame_json(&frames[1])).await;
+        assert_eq!(next_json(&mut ws).await["frame_index"], 0);
+
+        // A second session while the first is open: refused (limit 1).
+        let mut other = connect(&server).await;
+        send(&mut other, serde_json::json!({"session": session_json()})).await;
+        let e = next_json(&mut other).await;
+        assert_eq!(e["error"]["code"], "resource_exhausted", "{e}");
+
+        // Out of order ends the first socket with the field named.
+        send(&mut ws, frame_json(&frames[0])).await;
+        let e = next_json(&mut ws).await;
+        assert_eq!(e["error"]["field"], "frame.timestamp", "{e}");
+        assert_eq!(e["error"]["code"], "invalid_argument");
+        match ws.next().await {
+            Some(Ok(Message::Close(Some(c)))) => assert_eq!(u16::from(c.code), 1008),
+            other => panic!("expected a close frame, got {other:?}"),
+        }
+        drop(ws);
+
+        // Its slot is free again: a new socket gets a session; a frame first is an error.
+        let started = Instant::now();
+        loop {
+            let mut ws = connect(&server).await;
+            send(&mut ws, serde_json::json!({"session": session_json()})).await;
+            send(&mut ws, frame_json(&frames[0])).await;
+            let answer = next_json(&mut ws).await;
+            if answer["frame_index"] == 0 {
+                break;
+            }
+            assert_eq!(answer["error"]["code"], "resource_exhausted", "{answer}");
+            assert!(started.elapsed() < Duration::from_secs(5), "slot not freed");
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+        let mut ws = connect(&server).await;
+        send(&mut ws, frame_json(&frames[0])).await;
+        let e = next_json(&mut ws).await;
+        assert_eq!(e["error"]["field"], "session", "{e}");
+
+        // A plain GET is told to use a WebSocket.
+        let (status, code, _, _) = rest_error(
+            http()
+                .get(server.rest_url("/v1/stabilize"))
+                .send()
+                .await
+                .unwrap(),
+        )
+        .await;
+        assert!(status >= 400, "{status}");
+        assert_eq!(code, "websocket_required");
+    }
+}

@@ -798,6 +798,26 @@ pub struct AnalyzeResponseJson {
     pub frames: Vec<FrameResult>,
 }
 
+/// One message of the `GET /v1/stabilize` WebSocket (the proto's StabilizeRequest in JSON):
+/// `{"session": {…}}` first, then `{"frame": {…}}`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StabilizeMessageJson {
+    #[serde(default)]
+    pub session: Option<TactileSessionJson>,
+    #[serde(default)]
+    pub frame: Option<TactileFrameJson>,
+}
+
+/// The WebSocket's answer to one frame (the proto's StabilizationSetpoint in JSON): the frame's
+/// 0-based index and its result, with the fields of an analyze result.
+#[derive(Debug, Clone, Serialize)]
+pub struct SetpointJson {
+    pub frame_index: u64,
+    #[serde(flatten)]
+    pub result: FrameResult,
+}
+
 /// `GET /v1/hands`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct HandsJson {
@@ -829,7 +849,7 @@ pub struct ErrorJson {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ErrorDetailJson {
     /// invalid_argument, not_found, payload_too_large, resource_exhausted, unimplemented,
-    /// unsupported_media_type, internal.
+    /// unsupported_media_type, websocket_required, internal.
     pub code: String,
     pub field: Option<String>,
     pub message: String,

@@ -5,6 +5,7 @@ pub mod error;
 pub mod hands;
 pub mod json;
 pub mod plan;
+pub mod stabilize;
 pub mod tactile;
 
 use crate::runner::PlanRunner;
@@ -24,7 +25,7 @@ pub fn router(runner: PlanRunner) -> Router {
         .route("/v1/plan", post(plan::plan))
         .route("/v1/hands", get(hands::list).post(hands::register))
         .route("/v1/hands/{name}", get(hands::get))
-        .route("/v1/stabilize", get(stabilize))
+        .route("/v1/stabilize", get(stabilize::stabilize))
         .route("/v1/tactile/analyze", post(tactile::analyze))
         .route("/healthz", get(health))
         .route("/readyz", get(health))
@@ -46,12 +47,6 @@ pub async fn serve(
 
 async fn health() -> Json<Value> {
     Json(json!({"status": "ok"}))
-}
-
-async fn stabilize() -> ApiError {
-    ApiError::not_implemented(
-        "tactile stabilisation (WebSocket) is not implemented yet; plan grasps with POST /v1/plan",
-    )
 }
 
 async fn not_found(method: Method, uri: Uri) -> ApiError {
