@@ -1,7 +1,7 @@
 //! The graspctl binary against a running server.
 
 use graspd_core::cloud::io::write_ply_ascii;
-use graspd_e2e::{Server, binary, cylinder};
+use graspd_e2e::{Server, binary, cylinder, http};
 use std::process::{Command, Output};
 
 fn graspctl(server: &Server, args: &[&str]) -> Output {
@@ -121,4 +121,91 @@ fn plan_prints_a_summary_and_json() {
     );
     assert!(!out.status.success());
     assert!(text(&out.stderr).contains("/nonexistent.ply"));
+}
+
+const TACTILE_RECORDING: &str = "tactile/biotac_slide/mat5/mat5_1_bio.csv";
+
+#[tokio::test]
+async fn stabilize_replays_a_recording_with_one_setpoint_per_frame_like_analyze() {
+    let server = Server::start();
+    let path = graspd_testkit::testdata_dir().join(TACTILE_RECORDING);
+    let csv = path.to_str().unwrap();
+    let out = graspctl(
+        &server,
+        &["--json", "stabilize", "--csv", csv, "--fast", "--pretared"],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let lines: Vec<serde_json::Value> = text(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("one JSON setpoint per line"))
+        .collect();
+    let rows = std::fs::read_to_string(&path).unwrap().lines().count() - 1;
+    assert_eq!(lines.len(), rows);
+    assert!(text(&out.stderr).contains(&format!("{rows} frames")));
+
+    // The same session through POST /v1/tactile/analyze gives the same per-frame results.
+    let analyzed: serde_json::Value = http()
+        .post(server.rest_url("/v1/tactile/analyze?pretared=true"))
+        .header("content-type", "text/csv")
+        .body(std::fs::read(&path).unwrap())
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    for (i, mut line) in lines.into_iter().enumerate() {
+        assert_eq!(line["frame_index"], i);
+        line.as_object_mut().unwrap().remove("frame_index");
+        assert_eq!(line, analyzed["frames"][i], "frame {i}");
+    }
+
+    // The summary: frames, the event split, and the hint that raw forces need a gain.
+    let out = graspctl(
+        &server,
+        &["stabilize", "--csv", csv, "--fast", "--pretared"],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let summary = text(&out.stdout);
+    assert!(summary.contains(&format!("{rows} frames")), "{summary}");
+    assert!(summary.contains("events     non-contact"), "{summary}");
+    assert!(summary.contains("--calibration-gain"), "{summary}");
+    let out = graspctl(
+        &server,
+        &[
+            "stabilize",
+            "--csv",
+            csv,
+            "--fast",
+            "--pretared",
+            "--calibration-gain",
+            "0.01",
+        ],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(!text(&out.stdout).contains("--calibration-gain"));
+}
+
+#[test]
+fn stabilize_reports_a_layout_that_does_not_fit_the_recording() {
+    let server = Server::start();
+    let path = graspd_testkit::testdata_dir().join(TACTILE_RECORDING);
+    let out = graspctl(
+        &server,
+        &[
+            "stabilize",
+            "--csv",
+            path.to_str().unwrap(),
+            "--fast",
+            "--layout",
+            "biotac_sp",
+        ],
+    );
+    assert!(!out.status.success());
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("InvalidArgument"), "{stderr}");
+    assert!(stderr.contains("electrodes"), "{stderr}");
+    let out = graspctl(&server, &["stabilize", "--csv", "/nonexistent.csv"]);
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("cannot read /nonexistent.csv"));
 }

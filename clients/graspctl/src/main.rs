@@ -1,5 +1,7 @@
-//! `graspctl`: plan grasps on PCD/PLY clouds and list hands, over graspd's gRPC API.
+//! `graspctl`: plan grasps on PCD/PLY clouds, list hands and replay tactile recordings, over
+//! graspd's gRPC API.
 
+mod stabilize;
 mod summary;
 
 use clap::{Args, Parser, Subcommand};
@@ -50,6 +52,9 @@ enum Command {
         /// Show this hand in detail.
         name: Option<String>,
     },
+    /// Replay a BioTac recording (CSV) through the tactile stabilization stream: a live view,
+    /// then a summary (with --json: one setpoint per line on stdout, the summary on stderr).
+    Stabilize(stabilize::StabilizeArgs),
 }
 
 #[derive(Debug, Args)]
@@ -112,7 +117,7 @@ fn parse_plane(s: &str) -> Result<Plane, String> {
 }
 
 #[derive(Debug, Error)]
-enum CliError {
+pub(crate) enum CliError {
     #[error("cannot read {path}: {source}")]
     Read {
         path: PathBuf,
@@ -133,7 +138,7 @@ enum CliError {
     Json(#[from] serde_json::Error),
 }
 
-fn read(path: &PathBuf) -> Result<Vec<u8>, CliError> {
+pub(crate) fn read(path: &PathBuf) -> Result<Vec<u8>, CliError> {
     std::fs::read(path).map_err(|source| CliError::Read {
         path: path.clone(),
         source,
@@ -192,6 +197,7 @@ fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
 
 async fn run(cli: Cli) -> Result<(), CliError> {
     match &cli.command {
+        Command::Stabilize(args) => stabilize::run(&cli.server, args, cli.json).await?,
         Command::Plan(args) => {
             let request = convert::plan_request_to_proto(&build_request(args)?);
             let mut client = connect(&cli.server).await?;
