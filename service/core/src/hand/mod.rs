@@ -2,6 +2,7 @@
 
 pub mod catalog;
 pub mod description;
+pub mod kinematics;
 
 pub use catalog::{HandCatalog, parse_hand_toml};
 pub use description::{
