@@ -2,7 +2,10 @@
 //! `mj_kinematics` (fixture recorded by `scripts/fk_reference.py`), inverse kinematics, and the
 //! hand descriptions derived from the trees.
 
-use graspd_core::hand::kinematics::{JointKind, KinematicTree, mjcf};
+use graspd_core::GraspType;
+use graspd_core::hand::kinematics::{
+    ContactTarget, HandOverrides, IkOptions, JointKind, KinematicHand, KinematicTree, mjcf,
+};
 use serde::Deserialize;
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -129,4 +132,235 @@ fn forward_kinematics_matches_mujoco_within_1mm() {
     }
     report.sort();
     eprintln!("FK vs MuJoCo 3.17:\n  {}", report.join("\n  "));
+}
+
+const SHARED_HANDS: [(&str, usize); 4] = [
+    ("shadow_hand/right_hand.xml", 5),
+    ("wonik_allegro/right_hand.xml", 4),
+    ("robotiq_2f85/2f85.xml", 2),
+    ("barrett/wam_barrett_gripper.xml", 3),
+];
+
+fn hand(file: &str) -> KinematicHand {
+    let path = hands_dir().join(file);
+    KinematicHand::from_mjcf_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The description derived from each shared hand validates, has the hand's finger count, marks
+/// the real thumb, and measures a plausible aperture (the Robotiq 2F-85's stroke is 85 mm; the
+/// pad centres sit 4 mm behind the pad surfaces).
+#[test]
+fn derived_descriptions_validate() {
+    let thumbs = ["thdistal", "th", "right", "thumb"];
+    for ((file, fingers), thumb) in SHARED_HANDS.into_iter().zip(thumbs) {
+        let h = hand(file);
+        let d = h.describe().unwrap_or_else(|e| panic!("{file}: {e}"));
+        d.validate().unwrap();
+        assert_eq!(d.fingers.len(), fingers, "{file}");
+        let thumbs: Vec<&str> = d
+            .fingers
+            .iter()
+            .filter(|f| f.thumb)
+            .map(|f| f.name.as_str())
+            .collect();
+        assert_eq!(thumbs, [thumb], "{file}");
+        let g = &d.geometry;
+        eprintln!(
+            "{file}: palm '{}', fingers {:?}, a_max {:.3} m, a_min {:.3} m, h_max {:.3} m, \
+             palm {:.3}×{:.3}×{:.3} m, finger width {:.3} m, types {:?}",
+            h.tree.bodies[h.palm].name,
+            d.fingers
+                .iter()
+                .map(|f| f.name.as_str())
+                .collect::<Vec<_>>(),
+            g.max_aperture,
+            g.min_aperture,
+            g.max_height,
+            g.palm_length,
+            g.palm_width,
+            g.palm_thickness,
+            g.finger_width,
+            d.realisable_types()
+        );
+        assert!(
+            g.max_height > 0.03 && g.max_height < 0.3,
+            "{file}: h_max {}",
+            g.max_height
+        );
+        if fingers == 2 {
+            assert!(
+                (g.max_aperture - 0.093).abs() < 0.005,
+                "{file}: a_max {}",
+                g.max_aperture
+            );
+            assert_eq!(d.realisable_types(), [GraspType::Pinch]);
+        } else {
+            assert!(
+                g.max_aperture > 0.1 && g.max_aperture < 0.35,
+                "{file}: a_max {}",
+                g.max_aperture
+            );
+            assert_eq!(d.realisable_types().len(), 6, "{file}");
+        }
+        // Deterministic: the same model gives the same description.
+        assert_eq!(hand(file).describe().unwrap(), d);
+    }
+    // The Barrett's spread fingers and the Allegro's/Shadow's thumb: tripod uses the thumb and
+    // the two fingers nearest it; precision every finger.
+    let shadow = hand(SHARED_HANDS[0].0).describe().unwrap();
+    let tripod = shadow.resolve_forced(GraspType::Tripod).unwrap();
+    assert_eq!(tripod.contact_count(), 3);
+    assert_eq!(
+        shadow
+            .resolve_forced(GraspType::Precision)
+            .unwrap()
+            .contact_count(),
+        5
+    );
+}
+
+/// IK reaches the fingertip positions of random (constraint-respecting) configurations from the
+/// home pose within 2 mm, inside the joint limits, and calls a target 1 m away unreachable.
+#[test]
+fn inverse_kinematics_reaches_reachable_targets() {
+    let mut summary = Vec::new();
+    for (file, _) in SHARED_HANDS {
+        let h = hand(file);
+        let home = h.tree.home_configuration();
+        let configs = h.sample_configurations(25, 77);
+        assert_eq!(configs.len(), 25, "{file}");
+        let (mut solved, mut total, mut worst) = (0, 0, 0.0f64);
+        for q in &configs {
+            let tips = h.fingertips(q).unwrap();
+            for (f, target) in tips.iter().enumerate() {
+                let ik = h.inverse(f, target, &home).unwrap();
+                total += 1;
+                worst = worst.max(ik.residual);
+                if ik.reachable && ik.residual <= 0.002 {
+                    solved += 1;
+                }
+                for (j, v) in h.tree.joints.iter().zip(&ik.joints) {
+                    let (lo, hi) = j.limits();
+                    assert!(
+                        *v >= lo - 1e-12 && *v <= hi + 1e-12,
+                        "{file}: {} = {v}",
+                        j.name
+                    );
+                }
+                // The reported residual is the true distance.
+                let reached = h.fingertips(&ik.joints).unwrap()[f];
+                assert!(((reached - target).norm() - ik.residual).abs() < 1e-9);
+            }
+        }
+        summary.push(format!(
+            "{file}: {solved}/{total} within 2 mm, worst residual {worst:.2e} m"
+        ));
+        assert_eq!(solved, total, "{file}: worst residual {worst}");
+        for f in 0..h.fingers.len() {
+            let far = h.fingertips(&home).unwrap()[f] + nalgebra::Vector3::new(0.0, 0.0, 1.0);
+            let ik = h.inverse(f, &far, &home).unwrap();
+            assert!(
+                !ik.reachable && ik.residual > 0.8,
+                "{file}: finger {f}: {}",
+                ik.residual
+            );
+        }
+    }
+    eprintln!("IK:\n  {}", summary.join("\n  "));
+}
+
+/// Several contacts at once: residual per contact, reachable only when all are.
+#[test]
+fn inverse_contacts_reports_each_contact() {
+    let h = hand(SHARED_HANDS[3].0);
+    let home = h.tree.home_configuration();
+    let q = &h.sample_configurations(1, 5)[0];
+    let tips = h.fingertips(q).unwrap();
+    let mut targets: Vec<ContactTarget> = tips
+        .iter()
+        .enumerate()
+        .map(|(finger, p)| ContactTarget {
+            finger,
+            position: *p,
+        })
+        .collect();
+    let ik = h
+        .inverse_contacts(&targets, &home, &IkOptions::default())
+        .unwrap();
+    assert!(ik.reachable, "{:?}", ik.residuals);
+    assert_eq!(ik.residuals.len(), 3);
+    targets[1].position.z += 1.0;
+    let ik = h
+        .inverse_contacts(&targets, &home, &IkOptions::default())
+        .unwrap();
+    assert!(!ik.reachable);
+    assert!(ik.residuals[0] <= 0.002 && ik.residuals[1] > 0.8 && ik.residuals[2] <= 0.002);
+    targets[2].finger = 0;
+    let e = h
+        .inverse_contacts(&targets, &home, &IkOptions::default())
+        .unwrap_err();
+    assert_eq!(e.field, "contacts[2].finger");
+}
+
+/// The Robotiq 2F-85's linkage: the coupler chains are not fingers, the closures hold after
+/// projection, and random independent joint values violate them.
+#[test]
+fn robotiq_linkage_is_one_finger_per_side() {
+    let h = hand(SHARED_HANDS[2].0);
+    assert_eq!(h.tree.loop_closures.len(), 2);
+    assert_eq!(h.tree.couplings.len(), 1);
+    let tips: Vec<&str> = h
+        .fingers
+        .iter()
+        .map(|f| h.tree.bodies[f.tip].name.as_str())
+        .collect();
+    assert_eq!(tips, ["right_silicone_pad", "left_silicone_pad"]);
+    for q in h.sample_configurations(20, 3) {
+        assert!(h.tree.constraint_violation(&q).unwrap() <= 1e-3);
+    }
+    let raw = &fixture().hands["robotiq_2f85"].samples[0].qpos;
+    assert!(h.tree.constraint_violation(raw).unwrap() > 1e-3);
+    assert!(
+        h.tree
+            .constraint_violation(&h.tree.home_configuration())
+            .unwrap()
+            < 1e-9
+    );
+}
+
+/// Names given by the caller win over the detection rules.
+#[test]
+fn overrides_pick_palm_fingers_and_thumb() {
+    let tree = load(SHARED_HANDS[1].0);
+    let o = HandOverrides {
+        palm: Some("palm".into()),
+        fingertips: Some(vec!["th_tip".into(), "ff_tip".into(), "rf_tip".into()]),
+        thumb: Some("rf".into()),
+        name: Some("allegro3".into()),
+    };
+    let h = KinematicHand::from_tree(tree.clone(), &o).unwrap();
+    let names: Vec<&str> = h.fingers.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(names, ["th", "ff", "rf"]);
+    assert_eq!(h.thumb, 2);
+    let d = h.describe().unwrap();
+    assert_eq!(d.name, "allegro3");
+    assert!(d.fingers[2].thumb);
+    let bad = HandOverrides {
+        thumb: Some("pinky".into()),
+        ..Default::default()
+    };
+    assert_eq!(
+        KinematicHand::from_tree(tree.clone(), &bad)
+            .unwrap_err()
+            .field,
+        "hand.thumb"
+    );
+    let bad = HandOverrides {
+        fingertips: Some(vec!["nope".into(), "ff_tip".into()]),
+        ..Default::default()
+    };
+    assert_eq!(
+        KinematicHand::from_tree(tree, &bad).unwrap_err().field,
+        "hand.fingertips"
+    );
 }

@@ -81,3 +81,101 @@ impl KinematicTree {
         })
     }
 }
+
+impl KinematicTree {
+    /// Whether joint `j` moves body `b` (sits on the path from the root to `b`).
+    pub fn joint_moves(&self, j: usize, b: usize) -> bool {
+        let jb = self.joints[j].body;
+        let mut x = Some(b);
+        while let Some(c) = x {
+            if c == jb {
+                return true;
+            }
+            x = self.bodies[c].parent;
+        }
+        false
+    }
+
+    /// The violation of the model's loop closures (m) and joint couplings (rad or m) at `q`: the
+    /// norm of the stacked residuals. 0 for a model without either.
+    pub fn constraint_violation(&self, q: &[f64]) -> Result<f64, FieldError> {
+        let fk = self.forward(q)?;
+        Ok(self.constraint_residual(&fk, q).norm())
+    }
+
+    fn constraint_residual(&self, fk: &ForwardKinematics, q: &[f64]) -> nalgebra::DVector<f64> {
+        let m = 3 * self.loop_closures.len() + self.couplings.len();
+        let mut r = nalgebra::DVector::zeros(m);
+        for (k, lc) in self.loop_closures.iter().enumerate() {
+            let d = fk.point(lc.body1, &lc.anchor1) - fk.point(lc.body2, &lc.anchor2);
+            r.fixed_rows_mut::<3>(3 * k).copy_from(&d);
+        }
+        let base = 3 * self.loop_closures.len();
+        for (k, c) in self.couplings.iter().enumerate() {
+            let (j1, j2) = (&self.joints[c.joint1], &self.joints[c.joint2]);
+            let d = q[c.joint2] - j2.reference;
+            let poly = c
+                .polycoef
+                .iter()
+                .rev()
+                .fold(0.0, |acc, coef| acc * d + coef);
+            r[base + k] = q[c.joint1] - j1.reference - poly;
+        }
+        r
+    }
+
+    /// Moves `q` to the nearest configuration (in the damped least-squares sense, starting from
+    /// `q`) that satisfies the loop closures and joint couplings, keeping every joint in its
+    /// limits: Δq = −Jᵀ(JJᵀ + λ²I)⁻¹ r, iterated. Returns the remaining violation; callers decide
+    /// what is close enough (sampling drops configurations above 1 mm). A no-op without
+    /// constraints.
+    pub fn project_constraints(&self, q: &mut [f64]) -> Result<f64, FieldError> {
+        if self.loop_closures.is_empty() && self.couplings.is_empty() {
+            return Ok(0.0);
+        }
+        let n = self.joints.len();
+        let m = 3 * self.loop_closures.len() + self.couplings.len();
+        for _ in 0..60 {
+            let fk = self.forward(q)?;
+            let r = self.constraint_residual(&fk, q);
+            if r.norm() < 1e-7 {
+                break;
+            }
+            let mut jac = nalgebra::DMatrix::zeros(m, n);
+            let point_col = |b: usize, p: &Point3<f64>, j: usize| -> Vector3<f64> {
+                if !self.joint_moves(j, b) {
+                    return Vector3::zeros();
+                }
+                let (anchor, axis) = fk.joint_axes[j];
+                match self.joints[j].kind {
+                    JointKind::Hinge => axis.cross(&(p - anchor)),
+                    JointKind::Slide => axis.into_inner(),
+                }
+            };
+            for (k, lc) in self.loop_closures.iter().enumerate() {
+                let p1 = fk.point(lc.body1, &lc.anchor1);
+                let p2 = fk.point(lc.body2, &lc.anchor2);
+                for j in 0..n {
+                    let col = point_col(lc.body1, &p1, j) - point_col(lc.body2, &p2, j);
+                    jac.fixed_view_mut::<3, 1>(3 * k, j).copy_from(&col);
+                }
+            }
+            let base = 3 * self.loop_closures.len();
+            for (k, c) in self.couplings.iter().enumerate() {
+                let d = q[c.joint2] - self.joints[c.joint2].reference;
+                let p = &c.polycoef;
+                let slope = p[1] + 2.0 * p[2] * d + 3.0 * p[3] * d * d + 4.0 * p[4] * d * d * d;
+                jac[(base + k, c.joint1)] += 1.0;
+                jac[(base + k, c.joint2)] -= slope;
+            }
+            let a = &jac * jac.transpose() + nalgebra::DMatrix::identity(m, m) * 1e-8;
+            let Some(w) = a.lu().solve(&r) else { break };
+            let dq = -(jac.transpose() * w);
+            for (j, v) in q.iter_mut().enumerate() {
+                let (lo, hi) = self.joints[j].limits();
+                *v = (*v + dq[j]).clamp(lo, hi);
+            }
+        }
+        self.constraint_violation(q)
+    }
+}

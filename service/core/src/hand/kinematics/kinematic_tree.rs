@@ -119,13 +119,29 @@ pub struct Body {
     pub sites: Vec<Site>,
 }
 
-/// Two bodies tied together by a constraint of the model (MJCF `<equality><connect>`/`<weld>`),
-/// closing a kinematic loop. Forward kinematics ignores it (as `mj_kinematics` does); finger
-/// detection uses it to recognise linkage bars (see [`crate::hand::kinematics::hand_model`]).
+/// Two bodies tied together at a point by a constraint of the model (MJCF
+/// `<equality><connect>`, or the position part of a `<weld>`), closing a kinematic loop: the
+/// point `anchor1` of body1 must coincide with the point `anchor2` of body2. As in MuJoCo,
+/// `anchor2` is where `anchor1` lies in body2's frame at the reference configuration (qpos0).
+///
+/// Forward kinematics ignores closures (as `mj_kinematics` does). Finger detection uses them to
+/// recognise linkage bars, and workspace sampling projects configurations onto them
+/// ([`KinematicTree::project_constraints`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LoopClosure {
     pub body1: usize,
     pub body2: usize,
+    pub anchor1: Point3<f64>,
+    pub anchor2: Point3<f64>,
+}
+
+/// A joint whose value follows another's (MJCF `<equality><joint>`): with q₀ the reference
+/// values, q₁ − q₁₀ = c₀ + c₁ d + c₂ d² + c₃ d³ + c₄ d⁴, d = q₂ − q₂₀.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointCoupling {
+    pub joint1: usize,
+    pub joint2: usize,
+    pub polycoef: [f64; 5],
 }
 
 /// A kinematic tree of bodies and hinge/slide joints.
@@ -136,6 +152,7 @@ pub struct KinematicTree {
     pub bodies: Vec<Body>,
     pub joints: Vec<Joint>,
     pub loop_closures: Vec<LoopClosure>,
+    pub couplings: Vec<JointCoupling>,
 }
 
 impl KinematicTree {
@@ -163,6 +180,19 @@ impl KinematicTree {
         }
         path.reverse();
         Some(path)
+    }
+
+    /// The reference configuration (MuJoCo's qpos0): every joint at its reference value.
+    pub fn reference_configuration(&self) -> Vec<f64> {
+        self.joints.iter().map(|j| j.reference).collect()
+    }
+
+    /// The modelled ("home") pose: the reference configuration clamped into the limits. Hand
+    /// models are drawn open in it.
+    pub fn home_configuration(&self) -> Vec<f64> {
+        let mut q = self.reference_configuration();
+        self.clamp(&mut q);
+        q
     }
 
     /// A joint vector at the middle of every joint's limits.

@@ -17,7 +17,7 @@
 //! Inertial, actuator, tendon, sensor and contact sections are not kinematics and are ignored.
 
 use super::kinematic_tree::{
-    Body, Geom, GeomShape, Joint, JointKind, KinematicTree, LoopClosure, Site,
+    Body, Geom, GeomShape, Joint, JointCoupling, JointKind, KinematicTree, LoopClosure, Site,
 };
 use super::mesh::load_vertices;
 use super::xml::{self, Element};
@@ -76,6 +76,7 @@ pub fn parse_mjcf(text: &str, model_dir: &Path, source: &str) -> Result<Kinemati
             }],
             joints: Vec::new(),
             loop_closures: Vec::new(),
+            couplings: Vec::new(),
         },
     };
     let mut saw_worldbody = false;
@@ -88,22 +89,7 @@ pub fn parse_mjcf(text: &str, model_dir: &Path, source: &str) -> Result<Kinemati
     }
     for eq in root.children_named("equality") {
         for c in &eq.children {
-            if c.name != "connect" && c.name != "weld" {
-                continue;
-            }
-            let body = |k: &str| -> Result<Option<usize>, FieldError> {
-                match c.attr(k) {
-                    None => Ok(None),
-                    Some(n) => reader
-                        .tree
-                        .body_index(n)
-                        .map(Some)
-                        .ok_or_else(|| err(c, format!("{k} '{n}' is not a body of the model"))),
-                }
-            };
-            if let (Some(body1), Some(body2)) = (body("body1")?, body("body2")?) {
-                reader.tree.loop_closures.push(LoopClosure { body1, body2 });
-            }
+            reader.equality(c)?;
         }
     }
     reader.tree.validate(FIELD)?;
@@ -381,6 +367,79 @@ impl Reader {
                 }
                 _ => {}
             }
+        }
+        Ok(())
+    }
+
+    /// `<connect>`/`<weld>` between bodies become loop closures, `<joint>` couplings; other
+    /// equalities (tendon, flex, site-based) are not kinematic and are skipped.
+    fn equality(&mut self, c: &Element) -> Result<(), FieldError> {
+        let tree = &self.tree;
+        let body = |k: &str| -> Result<Option<usize>, FieldError> {
+            match c.attr(k) {
+                None => Ok(None),
+                Some(n) => tree
+                    .body_index(n)
+                    .map(Some)
+                    .ok_or_else(|| err(c, format!("{k} '{n}' is not a body of the model"))),
+            }
+        };
+        let joint = |k: &str| -> Result<Option<usize>, FieldError> {
+            match c.attr(k) {
+                None => Ok(None),
+                Some(n) => tree.joint_index(n).map(Some).ok_or_else(|| {
+                    err(
+                        c,
+                        format!("{k} '{n}' is not a hinge or slide joint of the model"),
+                    )
+                }),
+            }
+        };
+        match c.name.as_str() {
+            "connect" | "weld" => {
+                let (Some(body1), b2) = (body("body1")?, body("body2")?) else {
+                    return Ok(());
+                };
+                let body2 = b2.unwrap_or(0);
+                let a = Attrs { el: c, class: None };
+                let anchor1 = Point3::from(a.vec3("anchor")?.unwrap_or_else(Vector3::zeros));
+                let fk = self.tree.forward(&self.tree.reference_configuration())?;
+                let world = fk.body_poses[body1] * anchor1;
+                let anchor2 = fk.body_poses[body2].inverse() * world;
+                self.tree.loop_closures.push(LoopClosure {
+                    body1,
+                    body2,
+                    anchor1,
+                    anchor2,
+                });
+            }
+            "joint" => {
+                let Some(joint1) = joint("joint1")? else {
+                    return Err(err(c, "needs joint1"));
+                };
+                let Some(joint2) = joint("joint2")? else {
+                    // Without joint2 the joint is locked at its reference (plus polycoef[0]).
+                    return Ok(());
+                };
+                let a = Attrs { el: c, class: None };
+                let polycoef = match a.get("polycoef") {
+                    None => [0.0, 1.0, 0.0, 0.0, 0.0],
+                    Some(s) => {
+                        let v = xml::numbers_up_to(s, 5).ok_or_else(|| {
+                            err(c, format!("polycoef='{s}' must be up to 5 numbers"))
+                        })?;
+                        let mut p = [0.0; 5];
+                        p[..v.len()].copy_from_slice(&v);
+                        p
+                    }
+                };
+                self.tree.couplings.push(JointCoupling {
+                    joint1,
+                    joint2,
+                    polycoef,
+                });
+            }
+            _ => {}
         }
         Ok(())
     }

@@ -255,6 +255,7 @@ pub fn parse_urdf(text: &str, mesh_dir: &Path, source: &str) -> Result<Kinematic
         bodies: Vec::with_capacity(links.len()),
         joints: Vec::new(),
         loop_closures: Vec::new(),
+        couplings: Vec::new(),
     };
     let mut mesh_cache: HashMap<PathBuf, Arc<Vec<Point3<f64>>>> = HashMap::new();
     for &l in &order {
