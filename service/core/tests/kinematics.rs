@@ -202,6 +202,16 @@ fn derived_descriptions_validate() {
             );
             assert_eq!(d.realisable_types().len(), 6, "{file}");
         }
+        // The reach bound that lets IK give up early really bounds the sampled reach.
+        for (f, k) in d.fingers.iter().zip(&h.fingers) {
+            assert!(
+                f.length <= k.reach + 1e-9,
+                "{file}.{}: {} > {}",
+                f.name,
+                f.length,
+                k.reach
+            );
+        }
         // Deterministic: the same model gives the same description.
         assert_eq!(hand(file).describe().unwrap(), d);
     }

@@ -54,6 +54,11 @@ pub struct KinematicFinger {
     pub tip: usize,
     /// Contact point (regional centre of the fingertip) in the tip body's frame.
     pub tip_point: Point3<f64>,
+    /// An upper bound on the distance from the first joint's anchor to the contact point over
+    /// all configurations, m: the sum of the distances between successive joint anchors and from
+    /// the last anchor to the contact point (each invariant under the hinge it starts at), plus
+    /// the stroke of every slide. Targets farther than this are unreachable without searching.
+    pub reach: f64,
 }
 
 /// A hand with known kinematics: the tree, its palm, fingers and thumb.
@@ -155,12 +160,15 @@ impl KinematicHand {
                     ),
                 ));
             }
+            let tip_point = regional_centre(&tree, tip);
+            let reach = reach_bound(&tree, &joints, tip, &tip_point);
             fingers.push(KinematicFinger {
                 name: tree.bodies[tip].name.clone(),
                 bodies,
                 joints,
                 tip,
-                tip_point: regional_centre(&tree, tip),
+                tip_point,
+                reach,
             });
         }
         if fingers.len() < 2 {
@@ -375,6 +383,26 @@ impl KinematicHand {
             .min_by(|&a, &b| score(a).total_cmp(&score(b)).then(a.cmp(&b)))
             .expect("at least two fingers"))
     }
+}
+
+/// [`KinematicFinger::reach`] of a chain.
+fn reach_bound(tree: &KinematicTree, joints: &[usize], tip: usize, tip_point: &Point3<f64>) -> f64 {
+    let q = tree.home_configuration();
+    let fk = tree
+        .forward(&q)
+        .expect("home configuration has the tree's length");
+    let mut points: Vec<Point3<f64>> = joints.iter().map(|&j| fk.joint_axes[j].0).collect();
+    points.push(fk.point(tip, tip_point));
+    let links: f64 = points.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    let strokes: f64 = joints
+        .iter()
+        .filter(|&&j| tree.joints[j].kind == super::JointKind::Slide)
+        .map(|&j| {
+            let (lo, hi) = tree.joints[j].limits();
+            hi - lo
+        })
+        .sum();
+    links + strokes
 }
 
 /// Whether a body's subtree (itself included) carries a movable joint.

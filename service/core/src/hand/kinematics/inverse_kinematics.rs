@@ -10,13 +10,17 @@
 //! limits. The damping λ (metres) keeps the step bounded near singular configurations (a
 //! stretched finger) and for unreachable targets, where the iteration settles on the nearest
 //! reachable point instead of diverging. A start from `q0`, then seeded random restarts inside
-//! the limits, are tried until the residual is below `tolerance / 4`; the best is returned.
+//! the limits, are tried until the residual is below `tolerance / 4`; the best is returned. A
+//! target farther from the finger's base than its reach bound ([`KinematicFinger::reach`]) gets
+//! no restarts: it is unreachable whatever the start.
 //! Joints outside the finger's chain keep their `q0` values.
 //!
 //! Coupled joints (the Shadow hand's J1/J2 tendons, the Robotiq 2F-85's linkage) are solved as
 //! independent joints: the result is a valid FK configuration of the tree, not necessarily one
 //! the actuators can hold.
 
+#[cfg(doc)]
+use super::hand_model::KinematicFinger;
 use super::hand_model::KinematicHand;
 use super::kinematic_tree::JointKind;
 use crate::error::FieldError;
@@ -120,7 +124,11 @@ impl KinematicHand {
         let mut rng =
             ChaCha8Rng::seed_from_u64(opts.seed ^ (finger as u64).wrapping_mul(0x9e37_79b9));
         let (mut best_q, mut best_r) = self.solve_from(finger, target, q.clone(), opts);
-        for _ in 0..opts.restarts {
+        // Beyond the chain's reach no restart can help: keep the start from q0's best effort.
+        let base = self.hand_frame.inverse() * self.finger_bases_in_palm_one(finger, &q);
+        let hopeless = (target - base).norm() > f.reach + opts.tolerance;
+        let restarts = if hopeless { 0 } else { opts.restarts };
+        for _ in 0..restarts {
             if best_r <= 0.25 * opts.tolerance {
                 break;
             }
@@ -175,6 +183,14 @@ impl KinematicHand {
             residuals,
             reachable,
         })
+    }
+
+    /// The anchor of finger `finger`'s first joint in the palm body's frame (fixed relative to
+    /// the palm: no joint of the finger moves it).
+    fn finger_bases_in_palm_one(&self, finger: usize, q: &[f64]) -> Point3<f64> {
+        let fk = self.tree.forward(q).expect("checked joint vector");
+        let j = self.fingers[finger].joints[0];
+        fk.body_poses[self.palm].inverse() * fk.joint_axes[j].0
     }
 
     /// The contact point of finger `finger` and its Jacobian over the finger's joints, both in
