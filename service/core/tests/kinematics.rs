@@ -3,9 +3,12 @@
 //! hand descriptions derived from the trees.
 
 use graspd_core::GraspType;
+use graspd_core::cloud::Plane;
 use graspd_core::hand::kinematics::{
-    ContactTarget, HandOverrides, IkOptions, JointKind, KinematicHand, KinematicTree, mjcf,
+    ContactTarget, GeomShape, HandOverrides, IkOptions, JointKind, KinematicHand, KinematicTree,
+    mjcf,
 };
+use nalgebra::{Point3, Vector3};
 use serde::Deserialize;
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -267,7 +270,7 @@ fn inverse_kinematics_reaches_reachable_targets() {
         ));
         assert_eq!(solved, total, "{file}: worst residual {worst}");
         for f in 0..h.fingers.len() {
-            let far = h.fingertips(&home).unwrap()[f] + nalgebra::Vector3::new(0.0, 0.0, 1.0);
+            let far = h.fingertips(&home).unwrap()[f] + Vector3::new(0.0, 0.0, 1.0);
             let ik = h.inverse(f, &far, &home).unwrap();
             assert!(
                 !ik.reachable && ik.residual > 0.8,
@@ -373,4 +376,116 @@ fn overrides_pick_palm_fingers_and_thumb() {
         KinematicHand::from_tree(tree, &bad).unwrap_err().field,
         "hand.fingertips"
     );
+}
+
+/// Lowest signed height along `n` of the hand's collision geometry (palm and below), computed
+/// straight from the geoms (mesh vertices, box corners, sphere/capsule/cylinder support points),
+/// independently of parry.
+fn lowest_along(h: &KinematicHand, q: &[f64], n: &Vector3<f64>) -> f64 {
+    let fk = h.tree.forward(q).unwrap();
+    let root_in_hand = (fk.body_poses[h.palm] * h.hand_frame()).inverse();
+    let mut lowest = f64::INFINITY;
+    for (b, body) in h.tree.bodies.iter().enumerate() {
+        if b != h.palm && h.tree.path(h.palm, b).is_none() {
+            continue;
+        }
+        for g in body.geoms.iter().filter(|g| g.collision) {
+            let pose = root_in_hand * fk.body_poses[b] * g.pose;
+            let d = pose.rotation.inverse() * -n; // direction of the support point, geom frame
+            let support = |p: Point3<f64>| (pose * p).coords.dot(n);
+            let v = match &g.shape {
+                GeomShape::Mesh { vertices, .. } => vertices
+                    .iter()
+                    .map(|p| support(*p))
+                    .fold(f64::INFINITY, f64::min),
+                GeomShape::Box { half_extents: e } => support(Point3::new(
+                    e.x * d.x.signum(),
+                    e.y * d.y.signum(),
+                    e.z * d.z.signum(),
+                )),
+                GeomShape::Sphere { radius } => support(Point3::origin()) - radius,
+                GeomShape::Capsule {
+                    radius,
+                    half_length,
+                } => support(Point3::new(0.0, 0.0, half_length * d.z.signum())) - radius,
+                GeomShape::Cylinder {
+                    radius,
+                    half_length,
+                } => {
+                    let radial = Vector3::new(d.x, d.y, 0.0);
+                    let radial = radial.try_normalize(1e-12).unwrap_or_else(Vector3::zeros);
+                    support(Point3::from(
+                        radial * *radius + Vector3::z() * (*half_length * d.z.signum()),
+                    ))
+                }
+                s => panic!("unexpected {s:?}"),
+            };
+            lowest = lowest.min(v);
+        }
+    }
+    lowest
+}
+
+/// The posed convex pieces agree with the raw geoms on the lowest point toward the support plane
+/// (hulls keep the extreme vertices), and points inside the pieces count as inside while points
+/// 1 m away do not.
+#[test]
+fn collision_model_is_posed_by_forward_kinematics() {
+    let pose = nalgebra::Isometry3::translation(0.1, -0.2, 0.3);
+    for (file, _) in SHARED_HANDS {
+        let h = hand(file);
+        let model = h.collision_model().unwrap();
+        assert!(!model.pieces.is_empty(), "{file}");
+        for q in h.sample_configurations(5, 11) {
+            let posed = model.posed(&h, &q, &pose).unwrap();
+            for n in [
+                Vector3::z(),
+                -Vector3::z(),
+                Vector3::x(),
+                Vector3::new(0.3, -0.5, 0.8).normalize(),
+            ] {
+                let plane = Plane::through(&Point3::new(0.0, 0.0, -0.5), n);
+                let expected = lowest_along(&h, &q, &(pose.rotation.inverse() * n))
+                    + (pose.translation.vector - Vector3::new(0.0, 0.0, -0.5)).dot(&n);
+                let got = posed.plane_clearance(&plane);
+                assert!((got - expected).abs() < 1e-6, "{file}: {got} vs {expected}");
+            }
+            // An interior point of every piece: its origin (primitives) or the mean of its hull
+            // vertices, posed by FK and the hand pose.
+            let fk = h.tree.forward(&q).unwrap();
+            let root_in_world = pose * (fk.body_poses[h.palm] * h.hand_frame()).inverse();
+            let inner: Vec<Point3<f64>> = model
+                .pieces
+                .iter()
+                .map(|p| {
+                    let local = match p.shape.as_convex_polyhedron() {
+                        Some(c) => {
+                            let s = c
+                                .points()
+                                .iter()
+                                .fold(Vector3::zeros(), |a, v| a + Vector3::new(v.x, v.y, v.z));
+                            Point3::from(s / c.points().len() as f64)
+                        }
+                        None => Point3::origin(),
+                    };
+                    root_in_world * fk.body_poses[p.body] * p.pose * local
+                })
+                .collect();
+            assert_eq!(
+                posed.points_inside(&inner, 1e-4, usize::MAX),
+                inner.len(),
+                "{file}"
+            );
+            assert_eq!(
+                posed.points_inside(&inner, 1e-4, 3),
+                3.min(inner.len()),
+                "{file}"
+            );
+            let far: Vec<Point3<f64>> = inner
+                .iter()
+                .map(|p| p + Vector3::new(1.0, 0.0, 0.0))
+                .collect();
+            assert_eq!(posed.points_inside(&far, 0.002, usize::MAX), 0, "{file}");
+        }
+    }
 }

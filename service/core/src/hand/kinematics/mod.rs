@@ -13,6 +13,7 @@
 //! # Ok::<(), graspd_core::FieldError>(())
 //! ```
 
+pub mod collision_model;
 pub mod describe;
 pub mod forward_kinematics;
 pub mod hand_model;
@@ -23,6 +24,7 @@ pub mod mjcf;
 pub mod urdf;
 mod xml;
 
+pub use collision_model::{CollisionPiece, HandCollision, PosedCollision};
 pub use forward_kinematics::ForwardKinematics;
 pub use hand_model::{HandOverrides, KinematicFinger, KinematicHand};
 pub use inverse_kinematics::{ContactTarget, FingerIk, HandIk, IkOptions};

@@ -1,0 +1,271 @@
+//! Collision geometry of a hand with known kinematics (issue 6 §3): the collision geoms of the
+//! palm and of every body below it as convex parry3d shapes, posed by forward kinematics.
+//!
+//! - primitives map to their parry shapes (MuJoCo's cylinders and capsules run along z, parry's
+//!   cylinder along y: the piece is turned accordingly); an ellipsoid becomes the hull of 98
+//!   points on its surface; planes are skipped;
+//! - a mesh becomes the convex hull of its vertices (a decomposed mesh, such as the Barrett's
+//!   `*_convex_decomposition_p*` parts, stays a union of hulls; a non-convex single mesh is
+//!   over-approximated by its hull); a flat mesh whose hull is degenerate becomes its bounding box;
+//! - bodies above the palm (a wrist, a forearm) belong to the arm and are left out.
+//!
+//! A posed hand answers the two questions of the planner's collision check: the least signed
+//! distance to the support plane, and how many cloud points lie deeper than a tolerance inside it.
+
+use super::hand_model::KinematicHand;
+use super::kinematic_tree::GeomShape;
+use crate::cloud::Plane;
+use crate::error::FieldError;
+use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
+use parry3d_f64::math::{Pose3, Rot3, Vector as PVec};
+use parry3d_f64::shape::SharedShape;
+
+fn pv(v: &Vector3<f64>) -> PVec {
+    PVec::new(v.x, v.y, v.z)
+}
+
+fn pose3(iso: &Isometry3<f64>) -> Pose3 {
+    let q = iso.rotation;
+    Pose3::from_parts(
+        pv(&iso.translation.vector),
+        Rot3::from_xyzw(q.i, q.j, q.k, q.w),
+    )
+}
+
+/// One convex piece: a shape fixed to a body.
+#[derive(Clone)]
+pub struct CollisionPiece {
+    /// The body it moves with.
+    pub body: usize,
+    /// Pose of the shape in the body frame.
+    pub pose: Isometry3<f64>,
+    pub shape: SharedShape,
+}
+
+impl std::fmt::Debug for CollisionPiece {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CollisionPiece")
+            .field("body", &self.body)
+            .field("pose", &self.pose)
+            .field("shape", &self.shape.shape_type())
+            .finish()
+    }
+}
+
+/// The convex pieces of a hand, built once per hand.
+#[derive(Debug, Clone)]
+pub struct HandCollision {
+    pub pieces: Vec<CollisionPiece>,
+}
+
+/// The pieces posed in the world for one configuration and hand pose.
+#[derive(Debug, Clone)]
+pub struct PosedCollision {
+    pieces: Vec<(Pose3, SharedShape)>,
+}
+
+impl KinematicHand {
+    /// Builds the convex collision pieces of the palm and every body below it.
+    pub fn collision_model(&self) -> Result<HandCollision, FieldError> {
+        let mut pieces = Vec::new();
+        let mut stack = vec![self.palm];
+        while let Some(b) = stack.pop() {
+            let body = &self.tree.bodies[b];
+            stack.extend(body.children.iter().copied());
+            for g in body.geoms.iter().filter(|g| g.collision) {
+                let field = || format!("hand.bodies[{}].geoms", body.name);
+                let (shape, turn) = match &g.shape {
+                    GeomShape::Sphere { radius } => (SharedShape::ball(*radius), None),
+                    GeomShape::Capsule {
+                        radius,
+                        half_length,
+                    } => (SharedShape::capsule_z(*half_length, *radius), None),
+                    GeomShape::Cylinder {
+                        radius,
+                        half_length,
+                    } => (
+                        SharedShape::cylinder(*half_length, *radius),
+                        // parry's cylinder runs along y; MuJoCo's along z.
+                        Some(UnitQuaternion::from_axis_angle(
+                            &Vector3::x_axis(),
+                            std::f64::consts::FRAC_PI_2,
+                        )),
+                    ),
+                    GeomShape::Box { half_extents } => (
+                        SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z),
+                        None,
+                    ),
+                    GeomShape::Ellipsoid { radii } => {
+                        let pts: Vec<PVec> = (0..7)
+                            .flat_map(|i| {
+                                let th = std::f64::consts::PI * (i as f64 + 0.5) / 7.0;
+                                (0..14).map(move |k| {
+                                    let ph = std::f64::consts::TAU * k as f64 / 14.0;
+                                    (th, ph)
+                                })
+                            })
+                            .map(|(th, ph)| {
+                                PVec::new(
+                                    radii.x * th.sin() * ph.cos(),
+                                    radii.y * th.sin() * ph.sin(),
+                                    radii.z * th.cos(),
+                                )
+                            })
+                            .collect();
+                        let s = SharedShape::convex_hull(&pts).ok_or_else(|| {
+                            FieldError::new(field(), "degenerate ellipsoid (a zero radius)")
+                        })?;
+                        (s, None)
+                    }
+                    GeomShape::Plane => continue,
+                    GeomShape::Mesh { name, vertices, .. } => {
+                        if vertices.is_empty() {
+                            return Err(FieldError::new(
+                                field(),
+                                format!("collision mesh '{name}' has no vertices"),
+                            ));
+                        }
+                        (hull_or_box(vertices), None)
+                    }
+                };
+                let pose = match turn {
+                    Some(r) => g.pose * r,
+                    None => g.pose,
+                };
+                pieces.push(CollisionPiece {
+                    body: b,
+                    pose,
+                    shape,
+                });
+            }
+        }
+        Ok(HandCollision { pieces })
+    }
+}
+
+/// Convex hull of mesh vertices (deduplicated), or their bounding box if the hull is degenerate.
+fn hull_or_box(vertices: &[Point3<f64>]) -> SharedShape {
+    let mut pts: Vec<[u64; 3]> = vertices
+        .iter()
+        .map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
+        .collect();
+    pts.sort_unstable();
+    pts.dedup();
+    let pts: Vec<PVec> = pts
+        .iter()
+        .map(|b| {
+            PVec::new(
+                f64::from_bits(b[0]),
+                f64::from_bits(b[1]),
+                f64::from_bits(b[2]),
+            )
+        })
+        .collect();
+    if let Some(h) = SharedShape::convex_hull(&pts) {
+        return h;
+    }
+    let (lo, hi) = pts.iter().fold(
+        (PVec::splat(f64::INFINITY), PVec::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let half = ((hi - lo) * 0.5).max(PVec::splat(1e-4));
+    let centre = (hi + lo) * 0.5;
+    SharedShape::compound(vec![(
+        Pose3::from_translation(centre),
+        SharedShape::cuboid(half.x, half.y, half.z),
+    )])
+}
+
+impl HandCollision {
+    /// Poses the pieces for joint vector `q` with the hand frame at `hand_pose` in the world.
+    pub fn posed(
+        &self,
+        hand: &KinematicHand,
+        q: &[f64],
+        hand_pose: &Isometry3<f64>,
+    ) -> Result<PosedCollision, FieldError> {
+        let fk = hand.tree.forward(q)?;
+        // World ← hand frame ← palm body ← root.
+        let root_in_world = hand_pose * (fk.body_poses[hand.palm] * hand.hand_frame).inverse();
+        Ok(PosedCollision {
+            pieces: self
+                .pieces
+                .iter()
+                .map(|p| {
+                    (
+                        pose3(&(root_in_world * fk.body_poses[p.body] * p.pose)),
+                        p.shape.clone(),
+                    )
+                })
+                .collect(),
+        })
+    }
+}
+
+impl PosedCollision {
+    /// Least signed distance of the hand geometry to `plane` (negative: through it), from each
+    /// piece's support point against the plane normal.
+    pub fn plane_clearance(&self, plane: &Plane) -> f64 {
+        let down = pv(&(-plane.normal));
+        self.pieces
+            .iter()
+            .map(|(pose, shape)| {
+                let p = match shape.as_support_map() {
+                    Some(s) => s.support_point(pose, down),
+                    None => {
+                        // Compound (degenerate-mesh box): its AABB's lowest corner.
+                        let aabb = shape.compute_aabb(pose);
+                        let pick = |lo: f64, hi: f64, d: f64| if d < 0.0 { lo } else { hi };
+                        PVec::new(
+                            pick(aabb.mins.x, aabb.maxs.x, down.x),
+                            pick(aabb.mins.y, aabb.maxs.y, down.y),
+                            pick(aabb.mins.z, aabb.maxs.z, down.z),
+                        )
+                    }
+                };
+                plane.distance(&Point3::new(p.x, p.y, p.z))
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Number of `points` deeper than `tolerance` inside any piece, counting at most `limit`.
+    pub fn points_inside(&self, points: &[Point3<f64>], tolerance: f64, limit: usize) -> usize {
+        let boxes: Vec<_> = self
+            .pieces
+            .iter()
+            .map(|(pose, shape)| shape.compute_aabb(pose))
+            .collect();
+        let mut n = 0;
+        for p in points {
+            let v = PVec::new(p.x, p.y, p.z);
+            let inside = self.pieces.iter().zip(&boxes).any(|((pose, shape), aabb)| {
+                if v.cmplt(aabb.mins).any() || v.cmpgt(aabb.maxs).any() {
+                    return false;
+                }
+                if !shape.contains_point(pose, v) {
+                    return false;
+                }
+                // Depth = distance to the boundary. parry's projection of a ball's or capsule's
+                // exact centre is NaN (no direction): that point is the deepest one.
+                let depth = (shape.project_point(pose, v, false).point - v).length();
+                depth.is_nan() || depth > tolerance
+            });
+            if inside {
+                n += 1;
+                if n >= limit {
+                    break;
+                }
+            }
+        }
+        n
+    }
+
+    /// Number of posed pieces.
+    pub fn len(&self) -> usize {
+        self.pieces.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.pieces.is_empty()
+    }
+}
