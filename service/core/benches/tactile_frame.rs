@@ -1,8 +1,11 @@
 //! Per-frame latency of the tactile stabilizer's domain core (model-free detector, GMM force
 //! estimation, PID), single thread: p50, p99 and frames/s for 1 and 3 classic-BioTac fingers on a
-//! synthetic raw stream (baseline, press, slide with pac vibration).
+//! synthetic raw stream (baseline, press, slide with pac vibration), and for one finger on the
+//! real BioTac recordings of ../shared/testdata/tactile (pre-tared; the GMM's EM needs more
+//! iterations on their images than on the synthetic ones).
 //! `cargo bench -p graspd-core --bench tactile_frame`.
 
+use graspd_core::tactile::Recording;
 use graspd_core::tactile::layout::SensorLayout;
 use graspd_core::tactile::stabilizer::{
     FingerConfig, FingerReading, Frame, Stabilizer, StabilizerConfig,
@@ -34,25 +37,70 @@ fn reading(i: usize) -> FingerReading {
 }
 
 fn run(fingers: usize, frames: usize) {
-    let config = StabilizerConfig::for_fingers(
-        (0..fingers)
-            .map(|f| FingerConfig {
-                name: format!("f{f}"),
-                layout: SensorLayout::biotac(),
-                tare: TareConfig::default(),
-            })
-            .collect(),
-    );
-    let mut stab = Stabilizer::new(config).unwrap();
     let input: Vec<Frame> = (0..frames)
         .map(|i| Frame {
             timestamp: i as f64 * 0.01,
             fingers: (0..fingers).map(|_| reading(i)).collect(),
         })
         .collect();
+    measure(
+        &format!("{fingers} finger(s), synthetic"),
+        fingers,
+        TareConfig::default(),
+        &input,
+    );
+}
+
+/// One finger over the real recordings (every `mat*/mat*_1_bio.csv`), one after the other.
+fn run_recordings(limit: usize) {
+    let dir = graspd_testkit::testdata_dir().join("tactile/biotac_slide");
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        println!(
+            "1 finger, real recordings: {} not found, skipped",
+            dir.display()
+        );
+        return;
+    };
+    let mut paths: Vec<_> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_dir())
+        .map(|d| {
+            let name = d.file_name().unwrap().to_string_lossy().into_owned();
+            d.join(format!("{name}_1_bio.csv"))
+        })
+        .collect();
+    paths.sort();
+    let mut input = Vec::new();
+    for path in &paths {
+        let Ok(text) = std::fs::read_to_string(path) else {
+            continue;
+        };
+        let recording = Recording::from_csv(&text, None, None).expect("recording parses");
+        for mut f in recording.frames() {
+            f.timestamp = input.len() as f64 * 0.01;
+            input.push(f);
+        }
+    }
+    input.truncate(limit);
+    let label = format!("1 finger, {} real recordings", paths.len());
+    measure(&label, 1, TareConfig::pretared(), &input);
+}
+
+fn measure(label: &str, fingers: usize, tare: TareConfig, input: &[Frame]) {
+    let config = StabilizerConfig::for_fingers(
+        (0..fingers)
+            .map(|f| FingerConfig {
+                name: format!("f{f}"),
+                layout: SensorLayout::biotac(),
+                tare,
+            })
+            .collect(),
+    );
+    let mut stab = Stabilizer::new(config).unwrap();
+    let frames = input.len();
     let mut lat = Vec::with_capacity(frames);
     let all = Instant::now();
-    for f in &input {
+    for f in input {
         let t = Instant::now();
         black_box(stab.step(black_box(f)).unwrap());
         lat.push(t.elapsed().as_secs_f64() * 1e6);
@@ -61,7 +109,7 @@ fn run(fingers: usize, frames: usize) {
     lat.sort_by(f64::total_cmp);
     let q = |p: f64| lat[((p * (lat.len() - 1) as f64) as usize).min(lat.len() - 1)];
     println!(
-        "{fingers} finger(s): p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs per frame; {:.0} frames/s on one core",
+        "{label}: p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs per frame; {:.0} frames/s on one core",
         q(0.5),
         q(0.99),
         lat[lat.len() - 1],
@@ -76,4 +124,5 @@ fn main() {
     for fingers in [1, 3] {
         run(fingers, frames);
     }
+    run_recordings(frames);
 }
