@@ -21,7 +21,8 @@ use tonic::transport::Channel;
 /// How long the server may take to print its listening line.
 const START_TIMEOUT: Duration = Duration::from_secs(30);
 
-fn target_dir() -> PathBuf {
+/// The workspace's target directory (`CARGO_TARGET_DIR`, else `<workspace>/target`).
+pub fn target_dir() -> PathBuf {
     match std::env::var_os("CARGO_TARGET_DIR") {
         Some(dir) => PathBuf::from(dir),
         None => PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -59,7 +60,12 @@ impl Server {
 
     /// Starts graspd with extra flags (e.g. `["--max-message-bytes", "65536"]`).
     pub fn start_with(args: &[&str]) -> Self {
-        let mut command = Command::new(binary("graspd", "GRASPD_BIN"));
+        Self::start_binary(&binary("graspd", "GRASPD_BIN"), args)
+    }
+
+    /// Starts the graspd binary at `path` (e.g. a release build for a benchmark) with extra flags.
+    pub fn start_binary(path: &std::path::Path, args: &[&str]) -> Self {
+        let mut command = Command::new(path);
         for var in [
             "GRASPD_CONFIG",
             "GRASPD_GRPC_ADDR",
