@@ -208,6 +208,13 @@ fn malformed_xml_is_refused_with_its_position() {
     assert!(e.message.contains("ball"), "{e}");
     let e = mjcf_err("<mujoco><worldbody><body><geom class='nope'/></body></worldbody></mujoco>");
     assert!(e.message.contains("unknown default class 'nope'"), "{e}");
+    // Absurd nesting is refused before the readers recurse over it.
+    let deep = format!(
+        "<mujoco><worldbody>{}{}</worldbody></mujoco>",
+        "<body>".repeat(5000),
+        "</body>".repeat(5000)
+    );
+    assert!(mjcf_err(&deep).message.contains("nested deeper than"));
 }
 
 #[test]

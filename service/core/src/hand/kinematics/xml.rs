@@ -53,12 +53,29 @@ pub fn parse(text: &str, source: &str, field: &str) -> Result<Element, FieldErro
     }
     let doc = roxmltree::Document::parse(text)
         .map_err(|e| FieldError::new(field, format!("{source}: malformed XML: {e}")))?;
-    let source: Arc<str> = Arc::from(source);
-    Ok(convert(&doc, doc.root_element(), &source))
+    let source_name: Arc<str> = Arc::from(source);
+    convert(&doc, doc.root_element(), &source_name, 0).ok_or_else(|| {
+        FieldError::new(
+            field,
+            format!("{source}: elements nested deeper than {MAX_DEPTH} levels"),
+        )
+    })
 }
 
-fn convert(doc: &roxmltree::Document, node: roxmltree::Node, source: &Arc<str>) -> Element {
-    Element {
+/// Deepest element nesting accepted (the readers recurse over the tree; real hand models nest a
+/// few dozen levels).
+pub const MAX_DEPTH: usize = 256;
+
+fn convert(
+    doc: &roxmltree::Document,
+    node: roxmltree::Node,
+    source: &Arc<str>,
+    depth: usize,
+) -> Option<Element> {
+    if depth > MAX_DEPTH {
+        return None;
+    }
+    Some(Element {
         name: node.tag_name().name().to_string(),
         attrs: node
             .attributes()
@@ -67,11 +84,11 @@ fn convert(doc: &roxmltree::Document, node: roxmltree::Node, source: &Arc<str>) 
         children: node
             .children()
             .filter(|c| c.is_element())
-            .map(|c| convert(doc, c, source))
-            .collect(),
+            .map(|c| convert(doc, c, source, depth + 1))
+            .collect::<Option<_>>()?,
         source: source.clone(),
         line: doc.text_pos_at(node.range().start).row,
-    }
+    })
 }
 
 /// Reads a file as UTF-8 text, naming `field` in the error.
