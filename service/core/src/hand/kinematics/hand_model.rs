@@ -13,13 +13,20 @@
 //! - **Contact point** of a finger part: the regional centre of the part (method.md §1), taken as
 //!   the centre of the bounding box of the tip body's collision geometry, else of its parent's
 //!   (a visual-only pad on a collision pad), else the tip body's origin.
-//! - **Thumb**: the finger whose tip workspace is most opposed to the others'. With C_i the mean
-//!   contact point of finger i over seeded random configurations (palm frame) and c the mean of
-//!   all C_i, the thumb minimises Σ_{j≠i} cos∠(C_i − c, C_j − c): its offset from the hand's
-//!   centre points away from every other finger's. Ties go to the earlier finger.
-//! - **Finger names**: the tip body names with their common prefix and suffix removed
-//!   cut at separators (`wam/bhand/thumb/dist_link` → `thumb`, `ff_tip` → `ff`), or the full names where that leaves an empty,
-//!   duplicate or `palm` name.
+//! - **Thumb**: the finger most opposed to the others in the modelled open pose (the reference
+//!   configuration clamped into the limits, MuJoCo's qpos0). With C_i the contact point of
+//!   finger i there (palm frame) and c the mean of all C_i, the thumb minimises
+//!   Σ_{j≠i} cos∠(C_i − c, C_j − c): its offset from the hand's centre points away from every
+//!   other finger's. Ties go to the earlier finger. (Workspace means are not used here: a
+//!   Barrett finger's 180° spread averages its tip back onto the palm.)
+//! - **Hand frame** (the frame of [`crate::hand::HandDescription`]), fixed to the palm body: origin
+//!   at the centroid of the finger bases (first joint anchors: where the fingers leave the palm's
+//!   inner surface); +x, the closing direction, from the thumb's mean contact point to the mean of
+//!   the other fingers' (means over seeded workspace samples); +z, the approach, from the origin
+//!   toward the mean of all fingers' mean contact points, made orthogonal to x; +y = z × x.
+//! - **Finger names**: the tip body names with their common prefix and suffix removed, cut at
+//!   separators (`wam/bhand/thumb/dist_link` → `thumb`, `ff_tip` → `ff`), or the full names
+//!   where that leaves an empty, duplicate or `palm` name.
 
 use super::kinematic_tree::KinematicTree;
 use super::{GeomShape, mjcf, urdf};
@@ -342,7 +349,7 @@ impl KinematicHand {
     }
 
     /// The hand frame of the derived [`crate::hand::HandDescription`] as a pose in the palm
-    /// body's frame (see [`Self::derive_hand_frame`] for the rule).
+    /// body's frame (the **hand frame** rule of the module documentation).
     pub fn hand_frame(&self) -> Isometry3<f64> {
         self.hand_frame
     }
