@@ -6,7 +6,7 @@ use graspd_core::GraspType;
 use graspd_core::cloud::Plane;
 use graspd_core::hand::kinematics::{
     ContactTarget, GeomShape, HandOverrides, IkOptions, JointKind, KinematicHand, KinematicTree,
-    mjcf,
+    PalmFreedom, mjcf,
 };
 use nalgebra::{Point3, Vector3};
 use serde::Deserialize;
@@ -487,5 +487,78 @@ fn collision_model_is_posed_by_forward_kinematics() {
                 .collect();
             assert_eq!(posed.points_inside(&far, 0.002, usize::MAX), 0, "{file}");
         }
+    }
+}
+
+/// Fingers and palm together: contacts produced by a random configuration seen from a hand frame
+/// moved by 1 cm and 0.1 rad are reached within 2 mm, with the correction inside its bounds; a
+/// Robotiq pinch shifted 15 mm across the jaws, which the fingers alone cannot follow, is reached
+/// by moving the palm.
+#[test]
+fn inverse_kinematics_with_the_palm_pose() {
+    let shift = nalgebra::Isometry3::new(
+        Vector3::new(0.006, -0.005, 0.006),
+        Vector3::new(0.05, -0.06, 0.05),
+    );
+    let freedom = PalmFreedom::default();
+    let opts = IkOptions::default();
+    for (file, _) in SHARED_HANDS {
+        let h = hand(file);
+        let home = h.tree.home_configuration();
+        for q in h.sample_configurations(6, 21) {
+            let targets: Vec<ContactTarget> = h
+                .fingertips(&q)
+                .unwrap()
+                .iter()
+                .enumerate()
+                .map(|(finger, p)| ContactTarget {
+                    finger,
+                    position: shift * p,
+                })
+                .collect();
+            let ik = h
+                .inverse_with_palm(&targets, &home, &opts, &freedom)
+                .unwrap();
+            assert!(ik.reachable, "{file}: {:?}", ik.residuals);
+            assert!(
+                ik.palm_correction.translation.vector.norm() <= freedom.max_translation + 1e-12
+            );
+            assert!(ik.palm_correction.rotation.angle() <= freedom.max_rotation + 1e-12);
+            // The residuals are true distances for the returned joints and palm correction.
+            let tips = h.fingertips(&ik.joints).unwrap();
+            for (t, r) in targets.iter().zip(&ik.residuals) {
+                let d = (t.position - ik.palm_correction * tips[t.finger]).norm();
+                assert!((d - r).abs() < 1e-9);
+            }
+        }
+    }
+    let h = hand(SHARED_HANDS[2].0);
+    let home = h.tree.home_configuration();
+    let q = &h.sample_configurations(1, 4)[0];
+    let across = Vector3::new(0.0, 0.015, 0.0);
+    let targets: Vec<ContactTarget> = h
+        .fingertips(q)
+        .unwrap()
+        .iter()
+        .enumerate()
+        .map(|(finger, p)| ContactTarget {
+            finger,
+            position: p + across,
+        })
+        .collect();
+    let alone = h.inverse_contacts(&targets, &home, &opts).unwrap();
+    assert!(
+        !alone.reachable && alone.residuals.iter().all(|r| *r > 0.01),
+        "{:?}",
+        alone.residuals
+    );
+    let ik = h
+        .inverse_with_palm(&targets, &home, &opts, &freedom)
+        .unwrap();
+    assert!(ik.reachable, "{:?}", ik.residuals);
+    // The palm did the moving (a shift or a tilt about the jaw axis both serve).
+    let tips = h.fingertips(&ik.joints).unwrap();
+    for p in &tips {
+        assert!((ik.palm_correction * p - p).norm() > 0.01);
     }
 }

@@ -258,3 +258,207 @@ impl KinematicHand {
         best
     }
 }
+
+/// How far [`KinematicHand::inverse_with_palm`] may move the palm from its given pose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PalmFreedom {
+    /// Largest translation of the hand frame, m.
+    pub max_translation: f64,
+    /// Largest rotation of the hand frame, rad.
+    pub max_rotation: f64,
+    /// Weight of a palm motion against a joint motion in the least-squares step (< 1 makes the
+    /// solver prefer moving the fingers): palm columns of J are scaled by it.
+    pub weight: f64,
+}
+
+impl Default for PalmFreedom {
+    fn default() -> Self {
+        Self {
+            max_translation: 0.02,
+            max_rotation: 0.25,
+            weight: 0.5,
+        }
+    }
+}
+
+/// The solution of [`KinematicHand::inverse_with_palm`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct PalmIk {
+    /// Where the hand frame should be, expressed in the given (initial) hand frame: the new hand
+    /// pose is `initial_pose * palm_correction`.
+    pub palm_correction: nalgebra::Isometry3<f64>,
+    pub joints: Vec<f64>,
+    /// Per contact, in the order given, m.
+    pub residuals: Vec<f64>,
+    pub reachable: bool,
+}
+
+impl KinematicHand {
+    /// Contacts reached jointly by the fingers and a bounded correction of the palm pose
+    /// (issue 6 §2): the fingers' joints and a rigid motion T of the hand frame are solved
+    /// together by damped least squares over the stacked contacts, e_k = x*_k − T·p_k(q),
+    /// with the Jacobian [I, −[T·p_k]ₓ | R·J_k] (palm translation, palm rotation about the hand
+    /// origin, finger joints), palm columns weighted by `palm.weight`. Joints are clamped into
+    /// their limits, T into `palm`'s bounds. Targets are in the initial hand frame. Starts from
+    /// q0 and from `opts.restarts` seeded random finger configurations until every residual is
+    /// below the tolerance; the start with the least largest residual wins.
+    pub fn inverse_with_palm(
+        &self,
+        targets: &[ContactTarget],
+        q0: &[f64],
+        opts: &IkOptions,
+        palm: &PalmFreedom,
+    ) -> Result<PalmIk, FieldError> {
+        for (i, t) in targets.iter().enumerate() {
+            if t.finger >= self.fingers.len() {
+                return Err(FieldError::new(
+                    format!("contacts[{i}].finger"),
+                    format!("finger index {} out of range", t.finger),
+                ));
+            }
+            if targets[..i].iter().any(|o| o.finger == t.finger) {
+                return Err(FieldError::new(
+                    format!("contacts[{i}].finger"),
+                    format!("finger {} has two contacts", t.finger),
+                ));
+            }
+            if t.position.coords.iter().any(|v| !v.is_finite()) {
+                return Err(FieldError::new(
+                    format!("contacts[{i}].position"),
+                    "must be finite",
+                ));
+            }
+        }
+        let mut q = q0.to_vec();
+        self.tree.forward(&q)?;
+        self.tree.clamp(&mut q);
+        let mut rng = ChaCha8Rng::seed_from_u64(opts.seed ^ 0x9a1d);
+        let mut best = self.solve_with_palm(targets, q.clone(), opts, palm);
+        for _ in 0..opts.restarts {
+            if best.residuals.iter().all(|r| *r <= 0.25 * opts.tolerance) {
+                break;
+            }
+            let mut start = q.clone();
+            for t in targets {
+                for &j in &self.fingers[t.finger].joints {
+                    let (lo, hi) = self.tree.joints[j].limits();
+                    start[j] = if hi > lo {
+                        rng.random_range(lo..=hi)
+                    } else {
+                        lo
+                    };
+                }
+            }
+            let s = self.solve_with_palm(targets, start, opts, palm);
+            let worst = |r: &PalmIk| r.residuals.iter().cloned().fold(0.0, f64::max);
+            if worst(&s) < worst(&best) {
+                best = s;
+            }
+        }
+        best.reachable = best.residuals.iter().all(|r| *r <= opts.tolerance);
+        Ok(best)
+    }
+
+    fn solve_with_palm(
+        &self,
+        targets: &[ContactTarget],
+        mut q: Vec<f64>,
+        opts: &IkOptions,
+        palm: &PalmFreedom,
+    ) -> PalmIk {
+        use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+        let cols: Vec<usize> = targets
+            .iter()
+            .flat_map(|t| self.fingers[t.finger].joints.iter().copied())
+            .collect();
+        let m = 3 * targets.len();
+        let n = 6 + cols.len();
+        let mut t_palm = Isometry3::<f64>::identity();
+        let evaluate = |q: &[f64], t_palm: &Isometry3<f64>| -> Vec<(Point3<f64>, DMatrix<f64>)> {
+            targets
+                .iter()
+                .map(|t| {
+                    let (p, j) = self.point_and_jacobian(t.finger, q);
+                    (t_palm * p, j)
+                })
+                .collect()
+        };
+        let mut best: Option<(f64, PalmIk)> = None;
+        for it in 0..=opts.max_iterations {
+            let points = evaluate(&q, &t_palm);
+            let residuals: Vec<f64> = targets
+                .iter()
+                .zip(&points)
+                .map(|(t, (p, _))| (t.position - p).norm())
+                .collect();
+            let total = residuals.iter().map(|r| r * r).sum::<f64>().sqrt();
+            if best.as_ref().is_none_or(|b| total < b.0) {
+                best = Some((
+                    total,
+                    PalmIk {
+                        palm_correction: t_palm,
+                        joints: q.clone(),
+                        residuals,
+                        reachable: false,
+                    },
+                ));
+            }
+            if total < 1e-5 || it == opts.max_iterations {
+                break;
+            }
+            let mut jac = DMatrix::zeros(m, n);
+            let mut e = DVector::zeros(m);
+            let mut col_of = std::collections::HashMap::new();
+            for (c, &j) in cols.iter().enumerate() {
+                col_of.insert(j, 6 + c);
+            }
+            for (k, (t, (p, jk))) in targets.iter().zip(&points).enumerate() {
+                let d = t.position - p;
+                e.fixed_rows_mut::<3>(3 * k).copy_from(&d);
+                let w = palm.weight;
+                for a in 0..3 {
+                    jac[(3 * k + a, a)] = w;
+                }
+                // d(ω × p)/dω = −[p]ₓ
+                let px = p.coords.cross_matrix();
+                jac.view_mut((3 * k, 3), (3, 3)).copy_from(&(-px * w));
+                let rot = t_palm.rotation.to_rotation_matrix();
+                for (c, &j) in self.fingers[t.finger].joints.iter().enumerate() {
+                    let col = rot * jk.fixed_view::<3, 1>(0, c).into_owned();
+                    jac.fixed_view_mut::<3, 1>(3 * k, col_of[&j])
+                        .copy_from(&col);
+                }
+            }
+            let a =
+                &jac * jac.transpose() + DMatrix::identity(m, m) * (opts.damping * opts.damping);
+            let Some(w) = a.lu().solve(&e) else { break };
+            let mut dx = jac.transpose() * w;
+            let norm = dx.norm();
+            if norm > opts.max_step {
+                dx *= opts.max_step / norm;
+            }
+            let v = Vector3::new(dx[0], dx[1], dx[2]) * palm.weight;
+            let omega = Vector3::new(dx[3], dx[4], dx[5]) * palm.weight;
+            let step = Isometry3::from_parts(
+                Translation3::from(v),
+                UnitQuaternion::from_scaled_axis(omega),
+            );
+            t_palm = step * t_palm;
+            // Keep the correction inside its bounds.
+            let tr = t_palm.translation.vector;
+            if tr.norm() > palm.max_translation {
+                t_palm.translation.vector = tr * (palm.max_translation / tr.norm());
+            }
+            let angle = t_palm.rotation.angle();
+            if angle > palm.max_rotation {
+                let axis = t_palm.rotation.axis().expect("non-zero angle");
+                t_palm.rotation = UnitQuaternion::from_axis_angle(&axis, palm.max_rotation);
+            }
+            for (c, &j) in cols.iter().enumerate() {
+                let (lo, hi) = self.tree.joints[j].limits();
+                q[j] = (q[j] + dx[6 + c]).clamp(lo, hi);
+            }
+        }
+        best.expect("at least one evaluation").1
+    }
+}

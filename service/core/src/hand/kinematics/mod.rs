@@ -27,7 +27,7 @@ mod xml;
 pub use collision_model::{CollisionPiece, HandCollision, PosedCollision};
 pub use forward_kinematics::ForwardKinematics;
 pub use hand_model::{HandOverrides, KinematicFinger, KinematicHand};
-pub use inverse_kinematics::{ContactTarget, FingerIk, HandIk, IkOptions};
+pub use inverse_kinematics::{ContactTarget, FingerIk, HandIk, IkOptions, PalmFreedom, PalmIk};
 pub use kinematic_tree::{
     Body, Geom, GeomShape, Joint, JointCoupling, JointKind, KinematicTree, LoopClosure, Site,
 };
