@@ -10,7 +10,7 @@
 //!
 //! ```text
 //! cargo build --release --bins
-//! cargo bench -p graspd-e2e --bench tactile_load                      # 1, 10 and 50 sessions
+//! cargo bench -p graspd-e2e --bench tactile_load                      # 1, 5, 10, 25, 50 sessions
 //! cargo bench -p graspd-e2e --bench tactile_load -- --sessions 50 --rate 1000 --seconds 10
 //! ```
 
@@ -228,7 +228,7 @@ fn main() {
     let seconds = arg("--seconds").unwrap_or(10.0);
     let counts: Vec<usize> = match arg("--sessions") {
         Some(n) => vec![n as usize],
-        None => vec![1, 10, 50],
+        None => vec![1, 5, 10, 25, 50],
     };
     let server = Server::start_binary(&graspd, &["--max-tactile-sessions", "256"]);
     println!(
