@@ -6,7 +6,7 @@
 use graspd::facade::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
 use graspd::grpc::convert;
 use graspd_core::tactile::{Frame, Recording, StabilizerConfig, TareConfig};
-use graspd_e2e::{Server, http, rest_error};
+use graspd_e2e::{Server, assert_valid_plan_works, http, rest_error};
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::stabilize_request::Kind;
 use graspd_proto::v1::tactile_stabilizer_client::TactileStabilizerClient;
@@ -362,6 +362,59 @@ async fn the_session_limit_refuses_the_extra_session_and_frees_it_on_disconnect(
     let (answers, end) = exchange(second, &frames[..2]).await;
     assert_eq!(answers.len(), 2);
     assert!(end.is_none(), "{end:?}");
+}
+
+/// Resident memory of a process, bytes (Linux).
+fn rss_bytes(pid: u32) -> u64 {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmRSS:"))
+        .and_then(|v| v.split_whitespace().next())
+        .and_then(|kb| kb.parse::<u64>().ok())
+        .map_or(0, |kb| kb * 1024)
+}
+
+#[tokio::test]
+async fn a_reader_that_does_not_read_stalls_its_stream_not_the_servers_memory() {
+    let server = Server::start();
+    let frames = recording_frames();
+    let (tx, mut rx) = open(&server, session()).await.unwrap();
+    let before = rss_bytes(server.pid());
+    // Send without reading any answer: the bounded queues and HTTP/2 flow control must stop the
+    // sender long before 50,000 frames (about 20 MB of readings) are in flight.
+    let mut sent = 0usize;
+    let mut stalled = false;
+    for i in 0..50_000 {
+        let mut f = frames[i % frames.len()].clone();
+        f.timestamp = i as f64 * 0.001;
+        match tokio::time::timeout(Duration::from_secs(2), tx.send(frame_message(&f))).await {
+            Ok(Ok(())) => sent += 1,
+            Ok(Err(_)) => panic!("the stream closed after {sent} frames"),
+            Err(_) => {
+                stalled = true;
+                break;
+            }
+        }
+    }
+    assert!(
+        stalled,
+        "all {sent} frames were taken without reading an answer"
+    );
+    let grown = rss_bytes(server.pid()).saturating_sub(before);
+    eprintln!("stalled after {sent} unread frames; server memory +{grown} bytes");
+    assert!(
+        grown < 16 << 20,
+        "server memory grew by {grown} bytes with {sent} frames unread"
+    );
+    // Reading resumes the stream: the answers come in order, one per frame.
+    for i in 0..sent.min(500) {
+        let m = rx.message().await.unwrap().expect("an answer");
+        assert_eq!(m.frame_index as usize, i);
+    }
+    drop(tx);
+    drop(rx);
+    assert_valid_plan_works(&server).await;
 }
 
 mod websocket {
