@@ -3,7 +3,7 @@ CARGO ?= cargo
 # Extra flags for `make run`, e.g. make run ARGS="--rest-addr 127.0.0.1:8081 --log-format json"
 ARGS ?=
 
-.PHONY: build run test fmt lint
+.PHONY: build run test fmt lint fuzz
 
 build:
 	$(CARGO) build --bins
@@ -16,6 +16,7 @@ run:
 test:
 	$(CARGO) build --bins
 	$(CARGO) test --workspace
+	scripts/python-client-test.sh
 
 fmt:
 	$(CARGO) fmt --all
@@ -23,3 +24,7 @@ fmt:
 lint:
 	$(CARGO) fmt --all --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
+
+# Every decoder of untrusted input under libFuzzer, FUZZ_SECONDS each (docs/fuzzing.md).
+fuzz:
+	scripts/fuzz.sh

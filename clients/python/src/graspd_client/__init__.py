@@ -1,0 +1,294 @@
+"""Python client of graspd over gRPC.
+
+    import numpy as np
+    from graspd_client import Client
+
+    with Client("localhost:50051") as c:
+        plan = c.plan_cloud(points, hand="shadow", seed=1, support_plane=((0, 0, 1), 0.0))
+        print(plan.grasp_type, [ct.finger for ct in plan.contacts])
+
+        with c.stabilizer([Finger("th", layout="biotac")]) as session:
+            setpoint = session.step(t, [Reading(pdc, pac, tdc, tac, electrodes)])
+
+The messages are the generated ones of ``graspd.v1`` (``proto/graspd/v1/*.proto``); the helpers
+turn numpy arrays into them and back. Errors are ``grpc.RpcError`` with the server's status;
+``field_of(error)`` gives the request field the server named.
+"""
+
+from __future__ import annotations
+
+import queue
+from dataclasses import dataclass, field
+from typing import Iterable, Optional, Sequence
+
+import grpc
+import numpy as np
+
+from graspd.v1 import (
+    common_pb2,
+    grasp_planner_pb2_grpc,
+    hand_pb2,
+    plan_pb2,
+    tactile_stabilizer_pb2 as tactile_pb2,
+    tactile_stabilizer_pb2_grpc,
+)
+
+__all__ = [
+    "Client",
+    "Finger",
+    "Reading",
+    "StabilizerSession",
+    "cloud_message",
+    "field_of",
+    "rgbd_message",
+    "points_of",
+]
+
+GRASP_TYPES = {
+    "large_wrap": common_pb2.GRASP_TYPE_LARGE_WRAP,
+    "small_wrap": common_pb2.GRASP_TYPE_SMALL_WRAP,
+    "power": common_pb2.GRASP_TYPE_POWER,
+    "pinch": common_pb2.GRASP_TYPE_PINCH,
+    "precision": common_pb2.GRASP_TYPE_PRECISION,
+    "tripod": common_pb2.GRASP_TYPE_TRIPOD,
+}
+
+
+def field_of(error: grpc.RpcError) -> Optional[str]:
+    """The request field an INVALID_ARGUMENT names (the ``graspd-field`` trailer), if any."""
+    for key, value in (error.trailing_metadata() or ()):
+        if key == "graspd-field":
+            return value
+    return None
+
+
+def _xyz(array, name: str) -> np.ndarray:
+    a = np.asarray(array, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise ValueError(f"{name}: expected an (N, 3) array, got shape {a.shape}")
+    return a
+
+
+def cloud_message(points, normals=None, frame_id: str = "") -> plan_pb2.PointCloud:
+    """An (N, 3) array in metres (and optional unit normals) as the packed float32 cloud."""
+    p = _xyz(points, "points")
+    msg = plan_pb2.PointCloud(points=p.astype("<f4").tobytes(), frame_id=frame_id)
+    if normals is not None:
+        n = _xyz(normals, "normals")
+        if n.shape != p.shape:
+            raise ValueError(f"normals: shape {n.shape} does not match points {p.shape}")
+        msg.normals = n.astype("<f4").tobytes()
+    return msg
+
+
+def points_of(msg: plan_pb2.PointCloud) -> np.ndarray:
+    """The packed cloud back as an (N, 3) float64 array."""
+    return np.frombuffer(msg.points, dtype="<f4").reshape(-1, 3).astype(np.float64)
+
+
+def _image(array: np.ndarray, encoding: str) -> plan_pb2.Image:
+    a = np.ascontiguousarray(array)
+    height, width = a.shape[:2]
+    return plan_pb2.Image(
+        width=width, height=height, encoding=encoding, step=a.strides[0], data=a.tobytes()
+    )
+
+
+def rgbd_message(
+    color: np.ndarray,
+    depth: np.ndarray,
+    fx: float,
+    fy: float,
+    cx: float,
+    cy: float,
+    color_encoding: str = "rgb8",
+    depth_scale: float = 0.0,
+) -> plan_pb2.RgbdFrame:
+    """An (H, W, 3) uint8 colour image and an (H, W) depth image (uint16 millimetres as 16UC1,
+    or float32 metres as 32FC1) with pinhole intrinsics, as an RgbdFrame."""
+    color = np.asarray(color)
+    depth = np.asarray(depth)
+    if color.ndim != 3 or color.shape[2] != 3 or color.dtype != np.uint8:
+        raise ValueError(f"color: expected an (H, W, 3) uint8 array, got {color.shape} {color.dtype}")
+    if depth.dtype == np.uint16:
+        depth_encoding = "16UC1"
+    elif depth.dtype == np.float32:
+        depth_encoding = "32FC1"
+    else:
+        raise ValueError(f"depth: expected uint16 (mm) or float32 (m), got {depth.dtype}")
+    if depth.shape != color.shape[:2]:
+        raise ValueError(f"depth: shape {depth.shape} does not match color {color.shape[:2]}")
+    return plan_pb2.RgbdFrame(
+        color=_image(color, color_encoding),
+        depth=_image(depth.astype(depth.dtype.newbyteorder("<")), depth_encoding),
+        intrinsics=plan_pb2.CameraIntrinsics(fx=fx, fy=fy, cx=cx, cy=cy),
+        depth_scale=depth_scale,
+    )
+
+
+def _vec3(v) -> common_pb2.Vec3:
+    x, y, z = (float(c) for c in v)
+    return common_pb2.Vec3(x=x, y=y, z=z)
+
+
+@dataclass
+class Finger:
+    """One finger of a tactile session: a built-in layout name ("biotac", "biotac_sp")."""
+
+    name: str
+    layout: str = "biotac"
+    pretared: bool = False
+    baseline_frames: Optional[int] = None
+
+
+@dataclass
+class Reading:
+    """One finger's raw reading of a frame: pac as one value or the driver's 22 samples."""
+
+    pdc: float
+    pac: Sequence[float]
+    tdc: float
+    tac: float
+    electrodes: Sequence[float] = field(default_factory=list)
+
+
+class StabilizerSession:
+    """A ``Stabilize`` stream: ``step`` sends one frame and returns its setpoint (one answer per
+    frame, in order). Closing the session ends the stream and frees the server's slot."""
+
+    def __init__(self, stub, session: tactile_pb2.TactileSession, timeout: Optional[float]):
+        self._requests: "queue.Queue[Optional[tactile_pb2.StabilizeRequest]]" = queue.Queue()
+        self._requests.put(tactile_pb2.StabilizeRequest(session=session))
+        self._call = stub.Stabilize(iter(self._requests.get, None), timeout=timeout)
+        self.frames = 0
+
+    def step(self, timestamp: float, readings: Iterable[Reading]) -> tactile_pb2.StabilizationSetpoint:
+        frame = tactile_pb2.TactileFrame(timestamp=float(timestamp))
+        for r in readings:
+            pac = [float(r.pac)] if np.isscalar(r.pac) else [float(v) for v in r.pac]
+            frame.fingers.append(
+                tactile_pb2.FingerReading(
+                    pdc=float(r.pdc),
+                    pac=pac,
+                    tdc=float(r.tdc),
+                    tac=float(r.tac),
+                    electrodes=[float(e) for e in r.electrodes],
+                )
+            )
+        self._requests.put(tactile_pb2.StabilizeRequest(frame=frame))
+        answer = next(self._call)
+        self.frames += 1
+        return answer
+
+    def close(self) -> None:
+        self._requests.put(None)
+        self._call.cancel()
+
+    def __enter__(self) -> "StabilizerSession":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+class Client:
+    """A connection to graspd's gRPC port."""
+
+    def __init__(self, address: str = "localhost:50051", timeout: Optional[float] = 30.0,
+                 max_message_bytes: int = 64 << 20):
+        options = [
+            ("grpc.max_send_message_length", max_message_bytes),
+            ("grpc.max_receive_message_length", max_message_bytes),
+        ]
+        self._channel = grpc.insecure_channel(address, options=options)
+        self._planner = grasp_planner_pb2_grpc.GraspPlannerStub(self._channel)
+        self._tactile = tactile_stabilizer_pb2_grpc.TactileStabilizerStub(self._channel)
+        self.timeout = timeout
+
+    def close(self) -> None:
+        self._channel.close()
+
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def list_hands(self) -> Sequence[hand_pb2.HandDescription]:
+        return list(self._planner.ListHands(hand_pb2.ListHandsRequest(), timeout=self.timeout).hands)
+
+    def get_hand(self, name: str) -> hand_pb2.HandDescription:
+        return self._planner.GetHand(hand_pb2.GetHandRequest(name=name), timeout=self.timeout).hand
+
+    def plan(self, request: plan_pb2.PlanGraspRequest) -> plan_pb2.PlanGraspResponse:
+        return self._planner.PlanGrasp(request, timeout=self.timeout)
+
+    def plan_cloud(
+        self,
+        points,
+        hand: str = "parallel_gripper",
+        seed: int = 0,
+        normals=None,
+        grasp_type: Optional[str] = None,
+        support_plane=None,
+        viewpoint=None,
+        attention_point=None,
+        without_opposition: bool = False,
+    ) -> plan_pb2.PlanGraspResponse:
+        """Plans on an (N, 3) array in metres. ``support_plane`` is ``(normal, offset)`` with
+        n·x + offset = 0 and n toward the object; ``grasp_type`` forces a type by name."""
+        return self.plan(
+            self._request(
+                plan_pb2.PlanGraspRequest(cloud=cloud_message(points, normals)),
+                hand, seed, grasp_type, support_plane, viewpoint, attention_point,
+                without_opposition,
+            )
+        )
+
+    def plan_rgbd(self, color, depth, fx, fy, cx, cy, hand: str = "parallel_gripper",
+                  seed: int = 0, **kwargs) -> plan_pb2.PlanGraspResponse:
+        """Plans on an RGB-D frame (see ``rgbd_message``)."""
+        frame = rgbd_message(color, depth, fx, fy, cx, cy,
+                             color_encoding=kwargs.pop("color_encoding", "rgb8"),
+                             depth_scale=kwargs.pop("depth_scale", 0.0))
+        return self.plan(
+            self._request(plan_pb2.PlanGraspRequest(rgbd=frame), hand, seed,
+                          kwargs.pop("grasp_type", None), None, None, None, False)
+        )
+
+    @staticmethod
+    def _request(request, hand, seed, grasp_type, support_plane, viewpoint, attention_point,
+                 without_opposition) -> plan_pb2.PlanGraspRequest:
+        request.hand_name = hand
+        request.options.seed = int(seed)
+        if without_opposition:
+            request.options.mode = common_pb2.PLANNER_MODE_WITHOUT_OPPOSITION
+        if grasp_type is not None:
+            if grasp_type not in GRASP_TYPES:
+                raise ValueError(f"grasp_type: one of {sorted(GRASP_TYPES)}, got {grasp_type!r}")
+            request.hints.grasp_type = GRASP_TYPES[grasp_type]
+        if support_plane is not None:
+            normal, offset = support_plane
+            request.hints.support_plane.normal.CopyFrom(_vec3(normal))
+            request.hints.support_plane.offset = float(offset)
+        if viewpoint is not None:
+            request.hints.viewpoint.CopyFrom(_vec3(viewpoint))
+        if attention_point is not None:
+            request.hints.attention_point.CopyFrom(_vec3(attention_point))
+        return request
+
+    def stabilizer(self, fingers: Sequence[Finger], calibration_gain: Optional[float] = None,
+                   **law) -> StabilizerSession:
+        """Opens a tactile session; ``law`` may set f0, delta_material, delta_slip, f_min,
+        f_max, window_length, stride, alpha."""
+        session = tactile_pb2.TactileSession()
+        for f in fingers:
+            finger = session.fingers.add(name=f.name, layout_name=f.layout)
+            finger.tare.pretared = f.pretared
+            if f.baseline_frames is not None:
+                finger.tare.baseline_frames = f.baseline_frames
+        if calibration_gain is not None:
+            session.calibration_gain = calibration_gain
+        for key, value in law.items():
+            setattr(session, key, value)
+        return StabilizerSession(self._tactile, session, timeout=None)
