@@ -1,10 +1,11 @@
-//! graspd domain: hands, point clouds and the dual-stage pregrasping-opposition planner of the
+//! graspd domain: hands, point clouds, RGB-D perception and the dual-stage pregrasping-opposition planner of the
 //! dissertation (method.md). Plain Rust: no transport, async runtime or proto types here.
 
 pub mod cloud;
 pub mod error;
 pub mod grasp_type;
 pub mod hand;
+pub mod perception;
 pub mod planning;
 pub mod tactile;
 
