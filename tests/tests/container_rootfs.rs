@@ -256,6 +256,7 @@ async fn graspd_starts_from_the_assembled_image_and_passes_its_healthcheck() {
     // A closed port fails it.
     let status = Command::new(&health[0])
         .args(&health[1..])
+        .stderr(Stdio::null())
         .status()
         .unwrap();
     assert!(!status.success(), "HEALTHCHECK passes with graspd stopped");
