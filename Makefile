@@ -8,9 +8,18 @@ ARGS ?=
 build:
 	$(CARGO) build --bins
 
-# graspd with the built-in defaults: gRPC 0.0.0.0:50051, REST 0.0.0.0:8080.
+# The shared hand models, imported at start by `make run` when ../shared/testdata/hands exists.
+HANDS ?= ../shared/testdata/hands
+HAND_IMPORTS = $(if $(wildcard $(HANDS)/shadow_hand/right_hand.xml),\
+	--import-hand shadow_mjcf=$(HANDS)/shadow_hand/right_hand.xml \
+	--import-hand allegro=$(HANDS)/wonik_allegro/right_hand.xml \
+	--import-hand robotiq_2f85=$(HANDS)/robotiq_2f85/2f85.xml \
+	--import-hand barrett_mjcf=$(HANDS)/barrett/wam_barrett_gripper.xml)
+
+# graspd with the built-in defaults (gRPC 0.0.0.0:50051, REST 0.0.0.0:8080), the shared hands
+# imported when present, and registered hands kept in .hands/.
 run:
-	$(CARGO) run --bin graspd -- $(ARGS)
+	$(CARGO) run --bin graspd -- --hands-dir .hands $(HAND_IMPORTS) $(ARGS)
 
 # The end-to-end tests start the real binaries, so build them first.
 test:

@@ -75,6 +75,8 @@ impl Server {
             "GRASPD_MAX_CONCURRENT_PLANS",
             "GRASPD_MAX_TACTILE_SESSIONS",
             "GRASPD_LOG_FORMAT",
+            "GRASPD_HANDS_DIR",
+            "GRASPD_IMPORT_HANDS",
         ] {
             command.env_remove(var);
         }

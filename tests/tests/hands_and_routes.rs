@@ -1,4 +1,5 @@
-//! ListHands / GetHand round trips over gRPC and REST, and the routes that answer "not yet".
+//! ListHands / GetHand round trips over gRPC and REST, registration without a model, health and
+//! unknown routes.
 
 use graspd::grpc::convert::hand_from_proto;
 use graspd_core::HandDescription;
@@ -92,8 +93,9 @@ async fn unknown_hand_is_not_found_and_names_the_field() {
     assert!(message.contains("unknown hand 'foo'"));
 }
 
+/// RegisterHand and POST /v1/hands without a model name the missing field.
 #[tokio::test]
-async fn unimplemented_capabilities_say_so() {
+async fn registration_without_a_model_names_the_field() {
     let server = Server::start();
     let e = server
         .grpc()
@@ -101,29 +103,19 @@ async fn unimplemented_capabilities_say_so() {
         .register_hand(pb::RegisterHandRequest::default())
         .await
         .unwrap_err();
-    assert_eq!(e.code(), Code::Unimplemented);
-    assert!(
-        e.message().contains("not implemented yet"),
-        "{}",
-        e.message()
-    );
-
-    let client = http();
-    for (method, path) in [("POST", "/v1/hands"), ("GET", "/v1/stabilize")] {
-        let request = match method {
-            "POST" => client
-                .post(server.rest_url(path))
-                .json(&serde_json::json!({})),
-            _ => client.get(server.rest_url(path)),
-        };
-        let (status, code, _, message) = rest_error(request.send().await.unwrap()).await;
-        assert_eq!(
-            (status, code.as_str()),
-            (501, "unimplemented"),
-            "{method} {path}"
-        );
-        assert!(message.contains("not implemented yet"), "{message}");
-    }
+    assert_eq!(e.code(), Code::InvalidArgument);
+    assert!(e.message().starts_with("model: missing"), "{}", e.message());
+    let (status, code, field, _) = rest_error(
+        http()
+            .post(server.rest_url("/v1/hands"))
+            .json(&serde_json::json!({}))
+            .send()
+            .await
+            .unwrap(),
+    )
+    .await;
+    assert_eq!((status, code.as_str()), (400, "invalid_argument"));
+    assert_eq!(field.as_deref(), Some("model"));
 }
 
 #[tokio::test]

@@ -37,6 +37,7 @@ fn bench_plan(c: &mut Criterion) {
                         mode,
                         ..Default::default()
                     },
+                    kinematics: None,
                 };
                 let id =
                     BenchmarkId::new(format!("{hand}/{label}_opposition"), object.short_name());

@@ -77,6 +77,7 @@ fn input(
             ..Default::default()
         },
         options,
+        kinematics: None,
     }
 }
 

@@ -22,6 +22,7 @@ fn run(points: Vec<Point3<f64>>, hand: &str, seed: u64, plane: bool, forced: Opt
             max_iterations: 200,
             ..Default::default()
         },
+        kinematics: None,
     };
     match plan(input) {
         Ok(p) => {

@@ -59,6 +59,7 @@ fn input(points: Vec<Point3<f64>>, hand: &str, view: Point3<f64>, seed: u64) -> 
             seed,
             ..Default::default()
         },
+        kinematics: None,
     }
 }
 

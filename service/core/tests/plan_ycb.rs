@@ -24,6 +24,7 @@ fn plan_view(object: Object, hand: &str, seed: u64) -> (GraspPlan, PointCloud) {
             seed,
             ..Default::default()
         },
+        kinematics: None,
     })
     .unwrap();
     (p, cloud)

@@ -3,7 +3,7 @@
 //! clap resolves flag over environment; whatever neither gives falls back to the file and then
 //! to the defaults, so every flag is an `Option` here.
 
-use crate::facade::Limits;
+use crate::facade::{HandSetup, Limits};
 use clap::{Parser, ValueEnum};
 use graspd_core::cloud::MIN_POINTS;
 use serde::{Deserialize, Serialize};
@@ -45,6 +45,14 @@ pub struct Cli {
     /// Log format [default: pretty].
     #[arg(long, env = "GRASPD_LOG_FORMAT", value_enum, value_name = "FORMAT")]
     pub log_format: Option<LogFormat>,
+    /// Directory of registered hands: RegisterHand stores hands here and they are loaded again
+    /// at start [default: none: registered hands live in memory until the server stops].
+    #[arg(long, env = "GRASPD_HANDS_DIR", value_name = "DIR")]
+    pub hands_dir: Option<PathBuf>,
+    /// A hand to read at start from its MJCF (.xml) or URDF (.urdf) file, as NAME=PATH;
+    /// repeatable (environment: comma-separated). Replaces the config file's `import_hands`.
+    #[arg(long = "import-hand", env = "GRASPD_IMPORT_HANDS", value_name = "NAME=PATH", value_delimiter = ',', value_parser = parse_import)]
+    pub import_hands: Vec<(String, PathBuf)>,
     /// Print the effective configuration as TOML and exit.
     #[arg(long)]
     pub print_config: bool,
@@ -72,6 +80,10 @@ pub struct FileConfig {
     pub max_tactile_sessions: Option<usize>,
     pub log: Option<String>,
     pub log_format: Option<LogFormat>,
+    pub hands_dir: Option<PathBuf>,
+    /// `["NAME=PATH", …]`, as `--import-hand`.
+    #[serde(default)]
+    pub import_hands: Vec<String>,
 }
 
 /// The effective configuration.
@@ -85,6 +97,10 @@ pub struct Settings {
     pub max_tactile_sessions: usize,
     pub log: String,
     pub log_format: LogFormat,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hands_dir: Option<PathBuf>,
+    /// `NAME=PATH` entries.
+    pub import_hands: Vec<String>,
 }
 
 #[derive(Debug, Error)]
@@ -148,6 +164,21 @@ impl Settings {
                 .or(file.log)
                 .unwrap_or_else(|| "info".into()),
             log_format: cli.log_format.or(file.log_format).unwrap_or_default(),
+            hands_dir: cli.hands_dir.clone().or(file.hands_dir),
+            import_hands: if cli.import_hands.is_empty() {
+                for entry in &file.import_hands {
+                    parse_import(entry).map_err(|message| ConfigError::Invalid {
+                        field: "import_hands",
+                        message,
+                    })?;
+                }
+                file.import_hands
+            } else {
+                cli.import_hands
+                    .iter()
+                    .map(|(n, p)| format!("{n}={}", p.display()))
+                    .collect()
+            },
         };
         settings.check()?;
         Ok(settings)
@@ -181,6 +212,18 @@ impl Settings {
         Ok(())
     }
 
+    /// The hands to load at start.
+    pub fn hand_setup(&self) -> HandSetup {
+        HandSetup {
+            hands_dir: self.hands_dir.clone(),
+            imports: self
+                .import_hands
+                .iter()
+                .filter_map(|e| parse_import(e).ok())
+                .collect(),
+        }
+    }
+
     pub fn limits(&self) -> Limits {
         Limits {
             max_message_bytes: self.max_message_bytes,
@@ -189,6 +232,18 @@ impl Settings {
             max_tactile_sessions: self.max_tactile_sessions,
         }
     }
+}
+
+/// Parses `NAME=PATH` of `--import-hand`.
+pub fn parse_import(s: &str) -> Result<(String, PathBuf), String> {
+    let (name, path) = s.split_once('=').ok_or_else(|| {
+        format!("'{s}' is not NAME=PATH (e.g. allegro=hands/allegro/right_hand.xml)")
+    })?;
+    let (name, path) = (name.trim(), path.trim());
+    if name.is_empty() || path.is_empty() {
+        return Err(format!("'{s}' is not NAME=PATH: empty name or path"));
+    }
+    Ok((name.to_string(), PathBuf::from(path)))
 }
 
 /// Parses a byte count: `1048576`, `512KiB`, `32MiB`, `1GiB` (also `K`, `M`, `G`, binary).
@@ -241,6 +296,29 @@ mod tests {
             Err(ConfigError::Parse { .. })
         ));
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn hand_imports_and_hands_dir() {
+        let s = Settings::resolve(&cli(&[
+            "--hands-dir",
+            "/tmp/h",
+            "--import-hand",
+            "allegro=a/right_hand.xml",
+            "--import-hand",
+            "gripper=b.urdf",
+        ]))
+        .unwrap();
+        let setup = s.hand_setup();
+        assert_eq!(setup.hands_dir, Some(PathBuf::from("/tmp/h")));
+        assert_eq!(
+            setup.imports,
+            vec![
+                ("allegro".to_string(), PathBuf::from("a/right_hand.xml")),
+                ("gripper".to_string(), PathBuf::from("b.urdf"))
+            ]
+        );
+        assert!(Cli::try_parse_from(["graspd", "--import-hand", "nopath"]).is_err());
     }
 
     #[test]

@@ -2,7 +2,9 @@
 //! validation of a plan request before it reaches the planner. Plain Rust and synchronous (no
 //! tonic, axum, tokio or proto types), so it also serves as the library entry point.
 
+use crate::hand_store::{self, HandUpload};
 use graspd_core::cloud::{Plane, PointCloud};
+use graspd_core::planning::KinematicModel;
 use graspd_core::tactile::{
     FingerConfig, Frame, FrameResult, LayoutSpec, SensorCatalog, SensorLayout, Stabilizer,
     StabilizerConfig, TareConfig,
@@ -12,9 +14,11 @@ use graspd_core::{
     PlannerOptions,
 };
 use nalgebra::Point3;
+use std::collections::{BTreeMap, BTreeSet};
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::sync::Arc;
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, RwLock};
 use thiserror::Error;
 
 /// Limits on untrusted input, enforced by the transports (bytes) and by the facade (points).
@@ -103,6 +107,9 @@ pub enum ServiceError {
     /// A configured capacity is used up, retry later (RESOURCE_EXHAUSTED, 503).
     #[error("{0}")]
     Exhausted(String),
+    /// A name is taken (ALREADY_EXISTS, 409).
+    #[error(transparent)]
+    AlreadyExists(FieldError),
     /// Valid but not implemented yet (UNIMPLEMENTED, 501).
     #[error("{0}")]
     Unimplemented(String),
@@ -117,6 +124,7 @@ impl ServiceError {
         match self {
             ServiceError::InvalidArgument(e)
             | ServiceError::NotFound(e)
+            | ServiceError::AlreadyExists(e)
             | ServiceError::TooLarge(e) => Some(&e.field),
             _ => None,
         }
@@ -146,18 +154,51 @@ pub struct GraspService {
 
 #[derive(Debug)]
 struct Inner {
-    catalog: HandCatalog,
+    hands: RwLock<Hands>,
     sensors: SensorCatalog,
     limits: Limits,
     /// Tactile sessions open now.
     tactile_sessions: Arc<AtomicUsize>,
 }
 
+/// The hands: descriptions by name, the kinematics of those that have them, and where
+/// registrations go.
+#[derive(Debug, Default)]
+struct Hands {
+    catalog: HandCatalog,
+    models: BTreeMap<String, Arc<KinematicModel>>,
+    /// Names of hands registered at run time (in `dir`): the ones `replace` may replace.
+    registered: BTreeSet<String>,
+    dir: Option<PathBuf>,
+}
+
+/// The answer to a registration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegisteredHand {
+    pub description: HandDescription,
+    /// Joint names of the model, in the order plans list them.
+    pub joints: Vec<String>,
+    /// Stored in the hands directory (else in memory only).
+    pub persisted: bool,
+}
+
+/// Hands to load at start (configuration).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct HandSetup {
+    /// Registered hands persist here and are loaded again at start.
+    pub hands_dir: Option<PathBuf>,
+    /// `(name, model file)` pairs read at start (MJCF `.xml` or URDF `.urdf`).
+    pub imports: Vec<(String, PathBuf)>,
+}
+
 impl GraspService {
     pub fn new(catalog: HandCatalog, limits: Limits) -> Self {
         Self {
             inner: Arc::new(Inner {
-                catalog,
+                hands: RwLock::new(Hands {
+                    catalog,
+                    ..Hands::default()
+                }),
                 sensors: SensorCatalog::builtin(),
                 limits,
                 tactile_sessions: Arc::new(AtomicUsize::new(0)),
@@ -170,30 +211,177 @@ impl GraspService {
         Self::new(HandCatalog::builtin(), limits)
     }
 
+    /// The built-in hands, the imports and the registered hands of the hands directory. Any
+    /// hand that cannot be loaded, or a name used twice, is an error naming it (start-up fails).
+    pub fn with_hands(limits: Limits, setup: &HandSetup) -> Result<Self, String> {
+        let service = Self::builtin(limits);
+        {
+            let mut hands = service.hands_mut();
+            let add = |loaded: hand_store::LoadedHand, what: &str, hands: &mut Hands| {
+                let name = loaded.description.name.clone();
+                if hands.catalog.get(&name).is_some() {
+                    return Err(format!(
+                        "{what}: a hand named '{name}' exists already (built-in or imported twice)"
+                    ));
+                }
+                hands
+                    .catalog
+                    .insert(loaded.description)
+                    .map_err(|e| format!("{what}: {e}"))?;
+                hands.models.insert(name, loaded.model);
+                Ok(())
+            };
+            for (name, path) in &setup.imports {
+                let what = format!("imported hand '{name}' ({})", path.display());
+                hand_store::check_name(name, "name").map_err(|e| format!("{what}: {e}"))?;
+                let format = hand_store::ModelFormat::from_path(path).ok_or_else(|| {
+                    format!("{what}: unknown model format (give a .xml MJCF or a .urdf file)")
+                })?;
+                let loaded = hand_store::load_model(path, format, name, &Default::default())
+                    .map_err(|e| format!("{what}: {e}"))?;
+                add(loaded, &what, &mut hands)?;
+            }
+            if let Some(dir) = &setup.hands_dir {
+                for loaded in hand_store::load_dir(dir)? {
+                    let name = loaded.description.name.clone();
+                    add(loaded, &format!("registered hand '{name}'"), &mut hands)?;
+                    hands.registered.insert(name);
+                }
+                hands.dir = Some(dir.clone());
+            }
+        }
+        Ok(service)
+    }
+
+    fn hands(&self) -> std::sync::RwLockReadGuard<'_, Hands> {
+        self.inner
+            .hands
+            .read()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    fn hands_mut(&self) -> std::sync::RwLockWriteGuard<'_, Hands> {
+        self.inner
+            .hands
+            .write()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// Whether a hand has known kinematics (plans carry joints).
+    pub fn has_kinematics(&self, name: &str) -> bool {
+        self.hands().models.contains_key(name)
+    }
+
     pub fn limits(&self) -> &Limits {
         &self.inner.limits
     }
 
     /// All hands of the catalog, by name.
     pub fn list_hands(&self) -> Vec<HandDescription> {
-        self.inner.catalog.list().cloned().collect()
+        self.hands().catalog.list().cloned().collect()
     }
 
     /// One hand; `field` names the name in the error (`name`, `hand_name`).
     pub fn get_hand(&self, name: &str, field: &str) -> Result<HandDescription, ServiceError> {
-        self.inner
-            .catalog
-            .get(name)
-            .cloned()
-            .ok_or_else(|| ServiceError::NotFound(self.unknown_hand(name, field)))
+        let found = self.hands().catalog.get(name).cloned();
+        found.ok_or_else(|| ServiceError::NotFound(self.unknown_hand(name, field)))
     }
 
-    /// Registering hands at run time is not implemented yet; inline descriptions work per
-    /// request, and the catalog's hands are data files.
-    pub fn register_hand(&self) -> Result<(), ServiceError> {
-        Err(ServiceError::Unimplemented(
-            "registering hands is not implemented yet; send the hand inline as hand_description in each plan request".into(),
-        ))
+    /// Registers a hand from its model document and files (issue 6): parsed in a temporary
+    /// folder, then moved into the hands directory in one rename and added to the catalog; with
+    /// no hands directory configured it lives in memory until the server stops. `replace` may
+    /// replace only a hand registered this way. Blocking (file I/O and the workspace sampling):
+    /// async callers run it on a blocking thread.
+    pub fn register_hand(
+        &self,
+        upload: HandUpload,
+        replace: bool,
+    ) -> Result<RegisteredHand, ServiceError> {
+        hand_store::check_name(&upload.name, "name")?;
+        let upload_bytes = upload.text.len()
+            + upload
+                .assets
+                .iter()
+                .map(|a| a.data.len() + a.path.len())
+                .sum::<usize>();
+        let limit = self.inner.limits.max_message_bytes;
+        if upload_bytes > limit {
+            return Err(ServiceError::TooLarge(FieldError::new(
+                "model",
+                format!(
+                    "the model and its assets take {upload_bytes} bytes, over the configured limit of {limit} bytes (max_message_bytes)"
+                ),
+            )));
+        }
+        let dir = self.hands().dir.clone();
+        let check_clash = |hands: &Hands| -> Result<(), ServiceError> {
+            if hands.catalog.get(&upload.name).is_some()
+                && !(replace && hands.registered.contains(&upload.name))
+            {
+                let why = if hands.registered.contains(&upload.name) {
+                    "a registered hand has this name (set replace to replace it)"
+                } else {
+                    "a built-in or imported hand has this name"
+                };
+                return Err(ServiceError::AlreadyExists(FieldError::new(
+                    "name",
+                    format!("hand '{}' exists: {why}", upload.name),
+                )));
+            }
+            Ok(())
+        };
+        check_clash(&self.hands())?;
+        let to_service = |e: hand_store::RegisterError| match e {
+            hand_store::RegisterError::Invalid(f) => ServiceError::InvalidArgument(f),
+            hand_store::RegisterError::Io(m) => {
+                ServiceError::Internal(format!("cannot store the hand: {m}"))
+            }
+        };
+        // Registrations are serialised by the write lock from here: the check, the rename and
+        // the catalog update happen together.
+        let parent = dir.clone().unwrap_or_else(std::env::temp_dir);
+        let staged = guarded("registering the hand", || {
+            hand_store::register(&upload, &parent, None).map_err(to_service)
+        })?;
+        let mut hands = self.hands_mut();
+        check_clash(&hands)?;
+        if let Some(dir) = &dir {
+            let dest = dir.join(&upload.name);
+            let old = dir.join(format!(".tmp-replaced-{}", upload.name));
+            if dest.exists() {
+                std::fs::rename(&dest, &old).map_err(|e| {
+                    ServiceError::Internal(format!("cannot replace the stored hand: {e}"))
+                })?;
+            }
+            let stored = hand_store::register(&upload, dir, Some(&dest)).map_err(to_service);
+            match stored {
+                Ok(_) => {
+                    let _ = std::fs::remove_dir_all(&old);
+                }
+                Err(e) => {
+                    if old.exists() {
+                        let _ = std::fs::rename(&old, &dest);
+                    }
+                    return Err(e);
+                }
+            }
+            hands.registered.insert(upload.name.clone());
+        }
+        let registered = RegisteredHand {
+            description: staged.description.clone(),
+            joints: staged
+                .model
+                .hand
+                .tree
+                .joints
+                .iter()
+                .map(|j| j.name.clone())
+                .collect(),
+            persisted: dir.is_some(),
+        };
+        hands.catalog.insert(staged.description)?;
+        hands.models.insert(upload.name.clone(), staged.model);
+        Ok(registered)
     }
 
     /// Validates a request and plans (Algorithm 4). Blocking and CPU-bound: async callers run it
@@ -231,12 +419,16 @@ impl GraspService {
                 ));
             }
         };
-        let hand = match request.hand {
-            HandChoice::Name(name) => self.hand_by_name(&name)?,
+        let (hand, kinematics) = match request.hand {
+            HandChoice::Name(name) => {
+                let hand = self.hand_by_name(&name)?;
+                let model = self.hands().models.get(&name).cloned();
+                (hand, model)
+            }
             HandChoice::Inline(hand) => {
                 hand.validate()
                     .map_err(|e| rename_hand_field(e, "hand_description"))?;
-                *hand
+                (*hand, None)
             }
         };
         let max_points = self.inner.limits.max_points;
@@ -257,34 +449,23 @@ impl GraspService {
             hand,
             hints,
             options: request.options,
+            kinematics,
         })
     }
 
     fn hand_by_name(&self, name: &str) -> Result<HandDescription, ServiceError> {
-        self.inner
-            .catalog
-            .get(name)
-            .cloned()
-            .ok_or_else(|| ServiceError::InvalidArgument(self.unknown_hand(name, "hand_name")))
+        let found = self.hands().catalog.get(name).cloned();
+        found.ok_or_else(|| ServiceError::InvalidArgument(self.unknown_hand(name, "hand_name")))
     }
 
     fn unknown_hand(&self, name: &str, field: &str) -> FieldError {
+        let names = self.hands().catalog.names().join(", ");
         if name.is_empty() {
-            return FieldError::new(
-                field,
-                format!(
-                    "no hand given (known: {})",
-                    self.inner.catalog.names().join(", ")
-                ),
-            );
+            return FieldError::new(field, format!("no hand given (known: {names})"));
         }
         FieldError::new(
             field,
-            format!(
-                "unknown hand '{}' (known: {})",
-                name.escape_debug(),
-                self.inner.catalog.names().join(", ")
-            ),
+            format!("unknown hand '{}' (known: {names})", name.escape_debug(),),
         )
     }
 }

@@ -5,6 +5,7 @@
 pub mod config;
 pub mod facade;
 pub mod grpc;
+pub mod hand_store;
 pub mod rest;
 pub mod runner;
 pub mod server;

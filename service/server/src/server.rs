@@ -30,6 +30,8 @@ pub enum ServeError {
     Grpc(#[from] tonic::transport::Error),
     #[error("REST server: {0}")]
     Rest(std::io::Error),
+    #[error("cannot load the hands: {0}")]
+    Hands(String),
     #[error("server task failed: {0}")]
     Task(#[from] tokio::task::JoinError),
 }
@@ -46,12 +48,17 @@ pub async fn run(
     settings: &Settings,
     shutdown: impl Future<Output = ()> + Send,
 ) -> Result<(), ServeError> {
+    // Hands first: a model that cannot be read fails the start before anything listens.
+    let service = tokio::task::block_in_place(|| {
+        GraspService::with_hands(settings.limits(), &settings.hand_setup())
+    })
+    .map_err(ServeError::Hands)?;
     let grpc_listener = bind("gRPC", settings.grpc_addr).await?;
     let rest_listener = bind("REST", settings.rest_addr).await?;
     let grpc_addr = grpc_listener.local_addr().map_err(ServeError::Announce)?;
     let rest_addr = rest_listener.local_addr().map_err(ServeError::Announce)?;
 
-    let runner = PlanRunner::new(GraspService::builtin(settings.limits()));
+    let runner = PlanRunner::new(service);
     let (stop, stopped) = watch::channel(());
     let wait = |mut rx: watch::Receiver<()>| async move {
         let _ = rx.changed().await;

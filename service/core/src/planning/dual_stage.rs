@@ -246,6 +246,27 @@ pub struct SearchOutcome {
     pub stage2: StageStats,
     /// (ω_R, ω_G) of the stage that produced the final contacts.
     pub final_weights: [f64; 2],
+    /// Feasible runners-up of the final contacts, best first (earlier optima of the run that
+    /// produced them, at most [`MAX_ALTERNATIVES`]): what the planner falls back on when a hard
+    /// constraint checked after the search (IK reachability) rejects the best.
+    pub alternatives: Vec<Vec<usize>>,
+}
+
+/// Runners-up kept in [`SearchOutcome::alternatives`].
+pub const MAX_ALTERNATIVES: usize = 4;
+
+/// The earlier optima of a run, best first, without `best`.
+fn runners_up(run: &Annealed, best: &[usize]) -> Vec<Vec<usize>> {
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    for (_, _, c) in run.improvements.iter().rev() {
+        if c.as_slice() != best && !out.contains(c) {
+            out.push(c.clone());
+        }
+        if out.len() == MAX_ALTERNATIVES {
+            break;
+        }
+    }
+    out
 }
 
 fn budget(ctx: &SearchContext, space: f64) -> Schedule {
@@ -340,6 +361,7 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
         s2.candidates = ctx.points.len();
         s2.solution_space = prob.solution_space();
         let mut best: Option<(Vec<usize>, f64, bool)> = None;
+        let mut alternatives = Vec::new();
         for attempt in 0..=ctx.options.restarts {
             s2.restarts = attempt;
             let init = prob.initial_random(rng);
@@ -351,6 +373,9 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
                 None => (run.best_any.0.clone(), run.best_any.1, false),
             };
             if best.as_ref().is_none_or(|b| (cand.2, cand.1) > (b.2, b.1)) {
+                if cand.2 {
+                    alternatives = runners_up(&run, &cand.0);
+                }
                 best = Some(cand);
             }
             if best.as_ref().is_some_and(|b| b.2) {
@@ -374,6 +399,7 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
             stage1: s1,
             stage2: s2,
             final_weights: ctx.options.stage2_weights,
+            alternatives,
         });
     }
 
@@ -397,6 +423,11 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
             stage1: s1,
             stage2: s2,
             final_weights: ctx.options.stage1_weights,
+            alternatives: if stage1_ok {
+                oppositions[1..].to_vec()
+            } else {
+                Vec::new()
+            },
         });
     }
     let t = Instant::now();
@@ -407,6 +438,7 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
     // (contacts, merit, opposition, lateral axis) of the best run, feasible or not.
     let mut fallback: Option<(Stage2Result, f64)> = None;
     let mut found: Option<Stage2Result> = None;
+    let mut alternatives = Vec::new();
     'outer: for oc in &oppositions {
         let oc = (oc[0], oc[1]);
         let frame_y = OppositionSearch::new(ctx, 0.0)
@@ -430,7 +462,8 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
             let sched = budget(ctx, prob.solution_space());
             let run = anneal(&mut prob, init, sched, rng);
             add_run(&mut s2, &run);
-            if let Some((c, _)) = run.best {
+            if let Some((c, _)) = run.best.clone() {
+                alternatives = runners_up(&run, &c);
                 found = Some(Stage2Result {
                     contacts: c,
                     opposition: oc,
@@ -478,5 +511,6 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
         stage1: s1,
         stage2: s2,
         final_weights: ctx.options.stage2_weights,
+        alternatives: if feasible { alternatives } else { Vec::new() },
     })
 }

@@ -5,6 +5,7 @@ pub mod collision;
 pub mod dual_stage;
 pub mod ferrari_canny;
 pub mod hand_pose;
+pub mod joint_configuration;
 pub mod object_shape;
 pub mod opposition;
 mod planner;
@@ -14,5 +15,6 @@ pub mod slot_set;
 pub mod type_rule;
 pub mod types;
 
+pub use joint_configuration::{JointConfiguration, KinematicModel};
 pub use planner::{PlanInput, plan};
 pub use types::*;

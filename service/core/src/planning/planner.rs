@@ -3,6 +3,7 @@
 
 use super::dual_stage::{self, SearchOutcome};
 use super::ferrari_canny::{WrenchModel, ferrari_canny};
+use super::joint_configuration::{Effort, FingerTarget, KinematicModel, REACH_TOLERANCE};
 use super::object_shape::ObjectShape;
 use super::quality::ContactPoint;
 use super::search_context::SearchContext;
@@ -18,6 +19,7 @@ use crate::hand::{HandDescription, PALM};
 use nalgebra::{Point3, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// One planning request in domain terms (already validated at the edge).
@@ -27,6 +29,9 @@ pub struct PlanInput {
     pub hand: HandDescription,
     pub hints: PlanHints,
     pub options: PlannerOptions,
+    /// The hand's kinematics, when known (a hand imported from MJCF or URDF): the final contacts
+    /// then become joints, and IK reachability is a hard constraint.
+    pub kinematics: Option<Arc<KinematicModel>>,
 }
 
 /// Points closer than this to the support plane belong to the table (sensor noise band), m.
@@ -179,6 +184,7 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         hand,
         hints,
         options,
+        kinematics,
     } = input;
     options.validate()?;
     hand.validate()?;
@@ -293,6 +299,8 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         plane: scene.plane,
         options: &options,
         cos_friction: options.friction.atan().cos(),
+        kinematics: kinematics.as_deref(),
+        kinematic_checks: std::cell::Cell::new(0),
     };
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
     let outcome = dual_stage::search(&ctx, &mut rng).ok_or_else(|| {
@@ -300,7 +308,10 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
     })?;
 
     let t = Instant::now();
-    let mut plan = assemble(&ctx, &outcome, &scene, &options)?;
+    let mut plan = match kinematics.as_deref() {
+        None => assemble(&ctx, &outcome, &outcome.contacts, &scene, &options)?,
+        Some(model) => with_joints(&ctx, &outcome, &scene, &options, model)?,
+    };
     plan.grasp_type = grasp.grasp_type;
     plan.requested_type = requested;
     plan.type_source = type_source;
@@ -325,10 +336,11 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
 fn assemble(
     ctx: &SearchContext,
     out: &SearchOutcome,
+    chosen: &[usize],
     scene: &Scene,
     options: &PlannerOptions,
 ) -> Result<GraspPlan, PlanError> {
-    let (h1, h2) = out.contacts.split_at(out.k1);
+    let (h1, h2) = chosen.split_at(out.k1);
     let assessment = ctx.assess(h1, h2, out.final_weights);
     let (hand_pose, pregrasp_pose, frame) = ctx.poses(&assessment).ok_or_else(|| {
         FieldError::new(
@@ -336,7 +348,7 @@ fn assemble(
             "the planned contacts coincide; no hand pose exists",
         )
     })?;
-    let s = ctx.stability(&out.contacts);
+    let s = ctx.stability(chosen);
     let mut contacts = Vec::with_capacity(out.contacts.len());
     if ctx.palm_opposition() {
         let i = h1[0];
@@ -346,6 +358,7 @@ fn assemble(
             finger: PALM.into(),
             part: HandPart::Palm,
             point_index: scene.original[i],
+            ik_residual: None,
         });
     }
     for fc in ctx.finger_contacts(h1, h2, &frame) {
@@ -361,9 +374,10 @@ fn assemble(
             finger: finger.name.clone(),
             part,
             point_index: scene.original[fc.point],
+            ik_residual: None,
         });
     }
-    let cps: Vec<ContactPoint> = out.contacts.iter().map(|&i| ctx.contact(i)).collect();
+    let cps: Vec<ContactPoint> = chosen.iter().map(|&i| ctx.contact(i)).collect();
     let epsilon = ferrari_canny(
         &cps,
         &ctx.shape.center,
@@ -382,10 +396,16 @@ fn assemble(
             pregrasp_points_in_collision: c.pregrasp_points,
             approach_points_in_collision: c.approach_points,
             min_plane_clearance: c.plane_clearance,
+            final_plane_clearance: None,
         },
         None => CollisionReport::default(),
     };
-    let (oc1, oc2) = out.opposition;
+    // For a pinch the opposition is the grasp: a runner-up carries its own.
+    let (oc1, oc2) = if chosen.len() == 2 && chosen != out.contacts.as_slice() {
+        (chosen[0], chosen[1])
+    } else {
+        out.opposition
+    };
     let mut warnings = Vec::new();
     if out.feasible && !options.check_collisions && !collision.clear {
         warnings.push("collision checks are off and the posed hand collides".into());
@@ -430,4 +450,119 @@ fn assemble(
         seed: options.seed,
         warnings,
     })
+}
+
+/// How many of the search's configurations (the best, then its runners-up) are tried against
+/// the IK before the plan is declared unreachable.
+const IK_CANDIDATES: usize = 1 + super::dual_stage::MAX_ALTERNATIVES;
+
+/// The plan for a hand with known kinematics: the best configuration of the search whose
+/// contacts the fingers reach (IK residuals ≤ [`REACH_TOLERANCE`], jointly with a bounded palm
+/// correction) and whose posed hand is clear of the support plane and the cloud; else the first
+/// reachable one (reported as colliding); else the best, infeasible with the IK's reason. The
+/// joints, per-contact residuals, corrected hand pose and the kinematic collision figures of the
+/// final configuration go into the plan.
+fn with_joints(
+    ctx: &SearchContext,
+    out: &SearchOutcome,
+    scene: &Scene,
+    options: &PlannerOptions,
+    model: &KinematicModel,
+) -> Result<GraspPlan, PlanError> {
+    let candidates: Vec<&Vec<usize>> = std::iter::once(&out.contacts)
+        .chain(&out.alternatives)
+        .take(IK_CANDIDATES)
+        .collect();
+    let mut tried: Vec<(GraspPlan, super::JointConfiguration)> = Vec::new();
+    for chosen in candidates {
+        let plan = assemble(ctx, out, chosen, scene, options)?;
+        let targets: Vec<FingerTarget> = plan
+            .contacts
+            .iter()
+            .filter(|c| c.part != HandPart::Palm)
+            .map(|c| FingerTarget {
+                finger: c.finger.clone(),
+                position: c.position,
+                normal: c.normal,
+            })
+            .collect();
+        let joints = model.solve(
+            &targets,
+            &plan.hand_pose,
+            scene.plane.as_ref(),
+            ctx.points,
+            Effort::Final,
+            options.pregrasp_distance,
+        )?;
+        let done = joints.reachable && joints.clear();
+        tried.push((plan, joints));
+        if done || !out.feasible {
+            break;
+        }
+    }
+    let pick = tried
+        .iter()
+        .position(|(_, j)| j.reachable && j.clear())
+        .or_else(|| tried.iter().position(|(_, j)| j.reachable))
+        .unwrap_or(0);
+    let n_tried = tried.len();
+    let (mut plan, joints) = tried.swap_remove(pick);
+    let mut residuals = joints.residuals.iter();
+    for c in plan
+        .contacts
+        .iter_mut()
+        .filter(|c| c.part != HandPart::Palm)
+    {
+        c.ik_residual = residuals.next().copied();
+    }
+    let approach = joints.hand_pose.orientation * Vector3::z();
+    plan.pregrasp_pose = Pose {
+        position: joints.hand_pose.position - approach * options.pregrasp_distance,
+        orientation: joints.hand_pose.orientation,
+    };
+    plan.hand_pose = joints.hand_pose;
+    plan.joints = joints.joints.clone();
+    let col = &mut plan.collision;
+    col.checked = options.check_collisions;
+    // The hand's own geometry replaces the parametric model's at every pose.
+    col.final_points_in_collision = joints.points_in_collision;
+    col.pregrasp_points_in_collision = joints.pregrasp_points_in_collision;
+    col.approach_points_in_collision = joints.approach_points_in_collision;
+    col.final_plane_clearance = joints.plane_clearance;
+    col.min_plane_clearance = match (joints.plane_clearance, joints.approach_plane_clearance) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    };
+    col.clear = col.final_points_in_collision < super::collision::DEFAULT_MIN_POINTS
+        && col.pregrasp_points_in_collision < super::collision::DEFAULT_MIN_POINTS
+        && col.approach_points_in_collision < super::collision::DEFAULT_MIN_POINTS
+        && col
+            .min_plane_clearance
+            .is_none_or(|c| c >= -super::search_context::PLANE_TOLERANCE);
+    if plan.feasible && !joints.reachable {
+        plan.feasible = false;
+        plan.infeasible_reason = Some(format!(
+            "IK: the fingers reach the contacts only within {:.1} mm (tolerance {:.0} mm) for the best {} configurations",
+            joints.worst_residual * 1e3,
+            REACH_TOLERANCE * 1e3,
+            n_tried
+        ));
+    } else if plan.feasible && options.check_collisions && !joints.clear() {
+        plan.feasible = false;
+        plan.infeasible_reason = Some(format!(
+            "the hand posed at the planned joints collides: {}",
+            joints.describe_collision()
+        ));
+    } else if !joints.approach_clear() {
+        plan.warnings.push(format!(
+            "the hand shaped as planned collides on its way in: {}",
+            joints.describe_collision()
+        ));
+    }
+    if pick > 0 {
+        plan.warnings.push(format!(
+            "the search's best {pick} configuration(s) were not reachable by the hand's kinematics; runner-up {pick} was taken"
+        ));
+    }
+    Ok(plan)
 }

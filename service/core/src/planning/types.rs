@@ -166,6 +166,10 @@ pub struct Contact {
     pub part: HandPart,
     /// Index of the contact point in the request's cloud.
     pub point_index: usize,
+    /// For a hand with known kinematics: distance between the finger's contact point at the
+    /// planned joints and this contact (pad surface), m. None for the palm and parametric hands.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ik_residual: Option<f64>,
 }
 
 /// The pregrasping opposition O^s_{h1-h2}(C_o) (Definition 1, Eq 5.1).
@@ -236,6 +240,10 @@ pub struct CollisionReport {
     pub approach_points_in_collision: usize,
     /// Least signed distance of the hand geometry to the support plane (m), when one is known.
     pub min_plane_clearance: Option<f64>,
+    /// The same for the final configuration alone (for a hand with known kinematics, its own
+    /// collision geometry posed at the planned joints), m.
+    #[serde(default)]
+    pub final_plane_clearance: Option<f64>,
 }
 
 /// The planner's answer: g = (C_g, Joint_g, Pose_g) with the information that led to it.
@@ -254,7 +262,8 @@ pub struct GraspPlan {
     pub contacts: Vec<Contact>,
     pub hand_pose: Pose,
     pub pregrasp_pose: Pose,
-    /// Joint angles by name, when the hand's kinematics are known (empty for parametric hands).
+    /// Joint angles by name, when the hand's kinematics are known (empty for parametric hands):
+    /// every joint of the model, inside its limits.
     pub joints: Vec<(String, f64)>,
     pub quality: Quality,
     /// Whether S ≥ ε and every hard constraint held. When false, `infeasible_reason` says why and

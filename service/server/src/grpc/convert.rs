@@ -2,10 +2,12 @@
 //! (the server decodes requests and encodes plans; clients do the reverse). Decoding treats the
 //! message as untrusted: every error names the offending field by its proto path.
 
+use crate::facade::RegisteredHand;
 use crate::facade::{
     HandChoice, ImageHints, LayoutChoice, Limits, PlanRequest, PlanSource, ServiceError,
     TactileFingerRequest, TactileSessionRequest,
 };
+use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
 use graspd_core::cloud::{
     Plane, PointCloud, decode_packed_vec3, decode_packed_xyz, encode_packed_xyz,
 };
@@ -273,6 +275,52 @@ pub fn hand_to_proto(h: &HandDescription) -> pb::HandDescription {
 
 /// Decodes a hand; `field` prefixes the error paths (e.g. `hand_description`). The facade
 /// validates the values.
+/// Decodes a RegisterHand request: the name, the model document and its assets, the
+/// overrides; `replace`. Errors name the field.
+pub fn register_request_from_proto(
+    r: pb::RegisterHandRequest,
+) -> Result<(HandUpload, bool), FieldError> {
+    if r.hand.is_some() {
+        return Err(FieldError::new(
+            "hand",
+            "parametric descriptions are not registered; send them inline as hand_description with each plan, or register a robot description in model",
+        ));
+    }
+    let model = r.model.ok_or_else(|| {
+        FieldError::new("model", "missing: give the hand's MJCF or URDF document")
+    })?;
+    let format = ModelFormat::parse(&model.format, "model.format")?;
+    Ok((
+        HandUpload {
+            name: r.name,
+            format,
+            text: model.text,
+            assets: model
+                .assets
+                .into_iter()
+                .map(|a| Asset {
+                    path: a.path,
+                    data: a.data,
+                })
+                .collect(),
+            overrides: StoredOverrides {
+                palm: model.palm.filter(|s| !s.is_empty()),
+                fingertips: (!model.fingertips.is_empty()).then_some(model.fingertips),
+                thumb: model.thumb.filter(|s| !s.is_empty()),
+            },
+        },
+        r.replace,
+    ))
+}
+
+pub fn registered_to_proto(r: &RegisteredHand) -> pb::RegisterHandResponse {
+    pb::RegisterHandResponse {
+        hand: Some(hand_to_proto(&r.description)),
+        joints: r.joints.clone(),
+        persisted: r.persisted,
+    }
+}
+
 pub fn hand_from_proto(h: pb::HandDescription, field: &str) -> Result<HandDescription, FieldError> {
     let g = required(&h.geometry, &format!("{field}.geometry"))?;
     let mut fingers = Vec::with_capacity(h.fingers.len());
@@ -595,6 +643,7 @@ pub fn plan_to_proto(p: &GraspPlan) -> pb::PlanGraspResponse {
                 finger: c.finger.clone(),
                 part: hand_part_to_proto(c.part) as i32,
                 point_index: c.point_index as u64,
+                ik_residual: c.ik_residual,
             })
             .collect(),
         hand_pose: Some(pose_to_proto(&p.hand_pose)),
@@ -636,6 +685,7 @@ pub fn plan_to_proto(p: &GraspPlan) -> pb::PlanGraspResponse {
             pregrasp_points_in_collision: c.pregrasp_points_in_collision as u64,
             approach_points_in_collision: c.approach_points_in_collision as u64,
             min_plane_clearance: c.min_plane_clearance,
+            final_plane_clearance: c.final_plane_clearance,
         }),
         support_plane: p.support_plane.as_ref().map(plane_to_proto),
         plane_source: plane_source_name(p.plane_source).into(),
@@ -677,6 +727,7 @@ pub fn plan_from_proto(p: pb::PlanGraspResponse) -> Result<GraspPlan, FieldError
             finger: c.finger.clone(),
             part: hand_part_from_proto(c.part, &format!("{at}.part"))?,
             point_index: c.point_index as usize,
+            ik_residual: c.ik_residual,
         });
     }
     Ok(GraspPlan {
@@ -732,6 +783,7 @@ pub fn plan_from_proto(p: pb::PlanGraspResponse) -> Result<GraspPlan, FieldError
             pregrasp_points_in_collision: c.pregrasp_points_in_collision as usize,
             approach_points_in_collision: c.approach_points_in_collision as usize,
             min_plane_clearance: c.min_plane_clearance,
+            final_plane_clearance: c.final_plane_clearance,
         },
         support_plane: p
             .support_plane

@@ -62,11 +62,17 @@ impl GraspPlanner for GraspPlannerService {
 
     async fn register_hand(
         &self,
-        _request: Request<pb::RegisterHandRequest>,
+        request: Request<pb::RegisterHandRequest>,
     ) -> Result<Response<pb::RegisterHandResponse>, Status> {
-        self.runner.service().register_hand().map_err(to_status)?;
-        Err(Status::unimplemented(
-            "registering hands is not implemented yet",
-        ))
+        let (upload, replace) = convert::register_request_from_proto(request.into_inner())
+            .map_err(|e| to_status(e.into()))?;
+        let service = self.runner.service().clone();
+        let registered =
+            tokio::task::spawn_blocking(move || service.register_hand(upload, replace))
+                .await
+                .map_err(|e| Status::internal(format!("registration task failed: {e}")))?
+                .map_err(to_status)?;
+        tracing::info!(hand = %registered.description.name, persisted = registered.persisted, "hand registered");
+        Ok(Response::new(convert::registered_to_proto(&registered)))
     }
 }

@@ -12,6 +12,7 @@ pub fn to_status(e: ServiceError) -> Status {
     let code = match &e {
         ServiceError::InvalidArgument(_) => Code::InvalidArgument,
         ServiceError::NotFound(_) => Code::NotFound,
+        ServiceError::AlreadyExists(_) => Code::AlreadyExists,
         ServiceError::TooLarge(_) => Code::ResourceExhausted,
         ServiceError::Exhausted(_) => Code::ResourceExhausted,
         ServiceError::Unimplemented(_) => Code::Unimplemented,

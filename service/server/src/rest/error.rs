@@ -52,6 +52,9 @@ impl From<ServiceError> for ApiError {
         match e {
             ServiceError::InvalidArgument(f) => Self::invalid(f),
             ServiceError::NotFound(f) => Self::with_field(StatusCode::NOT_FOUND, "not_found", f),
+            ServiceError::AlreadyExists(f) => {
+                Self::with_field(StatusCode::CONFLICT, "already_exists", f)
+            }
             ServiceError::TooLarge(f) => Self::too_large(f),
             ServiceError::Exhausted(m) => {
                 Self::new(StatusCode::SERVICE_UNAVAILABLE, "resource_exhausted", m)

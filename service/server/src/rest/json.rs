@@ -4,10 +4,12 @@
 //! is, and the DTOs here cover what differs: clouds (arrays or base64), positions as
 //! `{x, y, z}` (accepted as `[x, y, z]` too), poses and the response layout.
 
+use crate::facade::RegisteredHand;
 use crate::facade::{
     HandChoice, ImageHints, LayoutChoice, Limits, PlanRequest, PlanSource, ServiceError,
     TactileFingerRequest, TactileSessionRequest,
 };
+use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
 use base64::Engine;
 use graspd_core::cloud::{Plane, PointCloud, decode_packed_vec3};
 use graspd_core::planning::{
@@ -429,6 +431,9 @@ pub struct ContactJson {
     pub finger: String,
     pub part: HandPart,
     pub point_index: usize,
+    /// IK residual (m) for a hand with known kinematics; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ik_residual: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -496,6 +501,7 @@ impl From<&GraspPlan> for PlanResponseJson {
                     finger: c.finger.clone(),
                     part: c.part,
                     point_index: c.point_index,
+                    ik_residual: c.ik_residual,
                 })
                 .collect(),
             hand_pose: (&p.hand_pose).into(),
@@ -901,4 +907,110 @@ mod tests {
         assert_eq!(e.field(), Some("cloud.points"));
         assert!(e.to_string().contains("byte length 11"));
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hand registration
+
+/// One uploaded file of `POST /v1/hands` in JSON: its relative path and its bytes in base64.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HandAssetJson {
+    pub path: String,
+    /// Standard base64 (proto3 JSON's encoding of bytes).
+    pub data: String,
+}
+
+/// The robot description of `POST /v1/hands` (proto `HandModel`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HandModelJson {
+    /// "mjcf" or "urdf".
+    #[serde(default)]
+    pub format: String,
+    /// The XML document.
+    #[serde(default)]
+    pub text: String,
+    #[serde(default)]
+    pub assets: Vec<HandAssetJson>,
+    #[serde(default)]
+    pub palm: Option<String>,
+    #[serde(default)]
+    pub fingertips: Vec<String>,
+    #[serde(default)]
+    pub thumb: Option<String>,
+}
+
+/// `POST /v1/hands` as JSON (proto `RegisterHandRequest`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegisterHandJson {
+    #[serde(default)]
+    pub name: String,
+    #[serde(default)]
+    pub replace: bool,
+    pub model: Option<HandModelJson>,
+    /// Parametric descriptions are not registered (answered 400, naming `hand`).
+    #[serde(default)]
+    pub hand: Option<serde_json::Value>,
+}
+
+/// The answer of `POST /v1/hands` (201).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RegisteredHandJson {
+    pub hand: HandDescription,
+    pub realisable_types: Vec<GraspType>,
+    pub joints: Vec<String>,
+    pub persisted: bool,
+}
+
+impl From<RegisteredHand> for RegisteredHandJson {
+    fn from(r: RegisteredHand) -> Self {
+        Self {
+            realisable_types: r.description.realisable_types(),
+            hand: r.description,
+            joints: r.joints,
+            persisted: r.persisted,
+        }
+    }
+}
+
+/// Decodes the JSON registration; errors name the field.
+pub fn register_request_from_json(r: RegisterHandJson) -> Result<(HandUpload, bool), FieldError> {
+    if r.hand.is_some() {
+        return Err(FieldError::new(
+            "hand",
+            "parametric descriptions are not registered; send them inline as hand_description with each plan, or register a robot description in model",
+        ));
+    }
+    let model = r.model.ok_or_else(|| {
+        FieldError::new("model", "missing: give the hand's MJCF or URDF document")
+    })?;
+    let format = ModelFormat::parse(&model.format, "model.format")?;
+    let mut assets = Vec::with_capacity(model.assets.len());
+    for (i, a) in model.assets.into_iter().enumerate() {
+        let data = base64::engine::general_purpose::STANDARD
+            .decode(a.data.as_bytes())
+            .map_err(|e| {
+                FieldError::new(
+                    format!("model.assets[{i}].data"),
+                    format!("not base64: {e}"),
+                )
+            })?;
+        assets.push(Asset { path: a.path, data });
+    }
+    Ok((
+        HandUpload {
+            name: r.name,
+            format,
+            text: model.text,
+            assets,
+            overrides: StoredOverrides {
+                palm: model.palm.filter(|s| !s.is_empty()),
+                fingertips: (!model.fingertips.is_empty()).then_some(model.fingertips),
+                thumb: model.thumb.filter(|s| !s.is_empty()),
+            },
+        },
+        r.replace,
+    ))
 }

@@ -82,7 +82,7 @@ class GraspPlannerServicer:
         raise NotImplementedError('Method not implemented!')
 
     def RegisterHand(self, request, context):
-        """Adds a hand (not implemented yet).
+        """Adds a hand from its MJCF or URDF description and files (ALREADY_EXISTS on a name clash).
         """
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
         context.set_details('Method not implemented!')

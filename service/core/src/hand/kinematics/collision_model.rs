@@ -19,6 +19,7 @@ use crate::error::FieldError;
 use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 use parry3d_f64::math::{Pose3, Rot3, Vector as PVec};
 use parry3d_f64::shape::SharedShape;
+use std::sync::Arc;
 
 fn pv(v: &Vector3<f64>) -> PVec {
     PVec::new(v.x, v.y, v.z)
@@ -40,6 +41,28 @@ pub struct CollisionPiece {
     /// Pose of the shape in the body frame.
     pub pose: Isometry3<f64>,
     pub shape: SharedShape,
+    /// For a convex polyhedron: its face planes (outward unit normal n, offset d with n·x ≤ d
+    /// inside), in the shape's frame; the depth of an inside point is min over faces of d − n·x.
+    pub faces: Option<FacePlanes>,
+}
+
+/// Face planes (outward unit normal, offset) of a convex piece.
+pub type FacePlanes = Arc<[(PVec, f64)]>;
+
+/// The face planes of a convex polyhedron.
+fn face_planes(shape: &SharedShape) -> Option<FacePlanes> {
+    let poly = shape.as_convex_polyhedron()?;
+    let pts = poly.points();
+    let adj = poly.vertices_adj_to_face();
+    let planes: Vec<(PVec, f64)> = poly
+        .faces()
+        .iter()
+        .map(|f| {
+            let v = pts[adj[f.first_vertex_or_edge as usize] as usize];
+            (f.normal, f.normal.dot(v))
+        })
+        .collect();
+    Some(planes.into())
 }
 
 impl std::fmt::Debug for CollisionPiece {
@@ -62,6 +85,7 @@ pub struct HandCollision {
 #[derive(Debug, Clone)]
 pub struct PosedCollision {
     pieces: Vec<(Pose3, SharedShape)>,
+    faces: Vec<Option<FacePlanes>>,
 }
 
 impl KinematicHand {
@@ -135,6 +159,7 @@ impl KinematicHand {
                 pieces.push(CollisionPiece {
                     body: b,
                     pose,
+                    faces: face_planes(&shape),
                     shape,
                 });
             }
@@ -198,6 +223,7 @@ impl HandCollision {
                     )
                 })
                 .collect(),
+            faces: self.pieces.iter().map(|p| p.faces.clone()).collect(),
         })
     }
 }
@@ -238,18 +264,25 @@ impl PosedCollision {
         let mut n = 0;
         for p in points {
             let v = PVec::new(p.x, p.y, p.z);
-            let inside = self.pieces.iter().zip(&boxes).any(|((pose, shape), aabb)| {
-                if v.cmplt(aabb.mins).any() || v.cmpgt(aabb.maxs).any() {
-                    return false;
-                }
-                if !shape.contains_point(pose, v) {
-                    return false;
-                }
-                // Depth = distance to the boundary. parry's projection of a ball's or capsule's
-                // exact centre is NaN (no direction): that point is the deepest one.
-                let depth = (shape.project_point(pose, v, false).point - v).length();
-                depth.is_nan() || depth > tolerance
-            });
+            let inside = self.pieces.iter().zip(&boxes).zip(&self.faces).any(
+                |(((pose, shape), aabb), faces)| {
+                    if v.cmplt(aabb.mins).any() || v.cmpgt(aabb.maxs).any() {
+                        return false;
+                    }
+                    if let Some(faces) = faces {
+                        // Exact for a convex polyhedron, without GJK.
+                        let local = pose.inverse_transform_point(v);
+                        return faces.iter().all(|(n, d)| d - n.dot(local) > tolerance);
+                    }
+                    if !shape.contains_point(pose, v) {
+                        return false;
+                    }
+                    // Depth = distance to the boundary. parry's projection of a ball's or capsule's
+                    // exact centre is NaN (no direction): that point is the deepest one.
+                    let depth = (shape.project_point(pose, v, false).point - v).length();
+                    depth.is_nan() || depth > tolerance
+                },
+            );
             if inside {
                 n += 1;
                 if n >= limit {

@@ -196,8 +196,17 @@ impl KinematicHand {
     /// The contact point of finger `finger` and its Jacobian over the finger's joints, both in
     /// the hand frame.
     fn point_and_jacobian(&self, finger: usize, q: &[f64]) -> (Point3<f64>, DMatrix<f64>) {
-        let f = &self.fingers[finger];
         let fk = self.tree.forward(q).expect("checked joint vector");
+        self.point_and_jacobian_at(finger, &fk)
+    }
+
+    /// [`Self::point_and_jacobian`] from a forward-kinematics result (one FK for many fingers).
+    fn point_and_jacobian_at(
+        &self,
+        finger: usize,
+        fk: &super::ForwardKinematics,
+    ) -> (Point3<f64>, DMatrix<f64>) {
+        let f = &self.fingers[finger];
         let to_hand = (fk.body_poses[self.palm] * self.hand_frame).inverse();
         let p_root = fk.body_poses[f.tip] * f.tip_point;
         let mut jac = DMatrix::zeros(3, f.joints.len());
@@ -375,15 +384,21 @@ impl KinematicHand {
         let n = 6 + cols.len();
         let mut t_palm = Isometry3::<f64>::identity();
         let evaluate = |q: &[f64], t_palm: &Isometry3<f64>| -> Vec<(Point3<f64>, DMatrix<f64>)> {
+            let fk = self.tree.forward(q).expect("checked joint vector");
             targets
                 .iter()
                 .map(|t| {
-                    let (p, j) = self.point_and_jacobian(t.finger, q);
+                    let (p, j) = self.point_and_jacobian_at(t.finger, &fk);
                     (t_palm * p, j)
                 })
                 .collect()
         };
+        let mut col_of = std::collections::HashMap::new();
+        for (c, &j) in cols.iter().enumerate() {
+            col_of.insert(j, 6 + c);
+        }
         let mut best: Option<(f64, PalmIk)> = None;
+        let mut stalled = 0;
         for it in 0..=opts.max_iterations {
             let points = evaluate(&q, &t_palm);
             let residuals: Vec<f64> = targets
@@ -392,6 +407,13 @@ impl KinematicHand {
                 .map(|(t, (p, _))| (t.position - p).norm())
                 .collect();
             let total = residuals.iter().map(|r| r * r).sum::<f64>().sqrt();
+            // Converged well inside the tolerance, or stalled (no gain of 1 µm in 10 steps).
+            let converged = residuals.iter().all(|r| *r <= 0.05 * opts.tolerance);
+            if best.as_ref().is_none_or(|b| total < b.0 - 1e-6) {
+                stalled = 0;
+            } else {
+                stalled += 1;
+            }
             if best.as_ref().is_none_or(|b| total < b.0) {
                 best = Some((
                     total,
@@ -403,15 +425,11 @@ impl KinematicHand {
                     },
                 ));
             }
-            if total < 1e-5 || it == opts.max_iterations {
+            if total < 1e-5 || converged || stalled >= 10 || it == opts.max_iterations {
                 break;
             }
             let mut jac = DMatrix::zeros(m, n);
             let mut e = DVector::zeros(m);
-            let mut col_of = std::collections::HashMap::new();
-            for (c, &j) in cols.iter().enumerate() {
-                col_of.insert(j, 6 + c);
-            }
             for (k, (t, (p, jk))) in targets.iter().zip(&points).enumerate() {
                 let d = t.position - p;
                 e.fixed_rows_mut::<3>(3 * k).copy_from(&d);

@@ -1,0 +1,82 @@
+//! The added cost of a hand's kinematics per plan (issue 6): for each shared hand
+//! (../shared/testdata/hands), plans on 2,000-point single views of the Table 5.2 YCB objects,
+//! once with the description derived from the model only (the parametric planner) and once with
+//! the kinematics (IK jointly with the palm pose and collision with the model's own geometry at
+//! every new stage-2 optimum, then the final joints). One thread; medians over objects × seeds.
+//! `cargo bench -p graspd-core --bench kinematic_plan` (`-- --quick`: 2 seeds).
+
+use graspd_core::hand::kinematics::KinematicHand;
+use graspd_core::planning::{KinematicModel, PlanHints, PlanInput, PlannerOptions, plan};
+use graspd_testkit::view::standard_view;
+use graspd_testkit::ycb::Object;
+use std::sync::Arc;
+use std::time::Instant;
+
+const HANDS: [(&str, &str); 4] = [
+    ("shadow", "shadow_hand/right_hand.xml"),
+    ("allegro", "wonik_allegro/right_hand.xml"),
+    ("robotiq_2f85", "robotiq_2f85/2f85.xml"),
+    ("barrett", "barrett/wam_barrett_gripper.xml"),
+];
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn main() {
+    let quick = std::env::args().any(|a| a == "--quick");
+    let seeds: u64 = if quick { 2 } else { 5 };
+    let dir = graspd_testkit::testdata_dir().join("hands");
+    println!(
+        "hand          plans  median ms (parametric | kinematic | added)  final joints ms  p90 kinematic ms  feasible (parametric | kinematic)"
+    );
+    for (name, file) in HANDS {
+        let t = Instant::now();
+        let hand = KinematicHand::from_mjcf_file(dir.join(file)).unwrap();
+        let model = Arc::new(KinematicModel::new(hand).unwrap());
+        let description = model.describe().unwrap();
+        let load_ms = t.elapsed().as_secs_f64() * 1e3;
+        let (mut base, mut kin, mut fin) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut base_ok, mut kin_ok) = (0, 0);
+        for object in Object::TABLE_5_2 {
+            for seed in 1..=seeds {
+                let view = standard_view(object, 2000, seed);
+                let input = |kinematics: Option<Arc<KinematicModel>>| PlanInput {
+                    cloud: view.object_cloud(),
+                    hand: description.clone(),
+                    hints: PlanHints {
+                        support_plane: Some(view.support_plane),
+                        viewpoint: Some(view.viewpoint),
+                        ..Default::default()
+                    },
+                    options: PlannerOptions {
+                        seed,
+                        ..Default::default()
+                    },
+                    kinematics,
+                };
+                let p = plan(input(None)).unwrap();
+                base.push(p.timings.total * 1e3);
+                base_ok += usize::from(p.feasible);
+                let p = plan(input(Some(model.clone()))).unwrap();
+                kin.push(p.timings.total * 1e3);
+                fin.push(p.timings.finalize * 1e3);
+                kin_ok += usize::from(p.feasible);
+            }
+        }
+        let n = base.len();
+        let (mb, mk) = (median(&mut base), median(&mut kin));
+        let p90 = kin[(0.9 * (n - 1) as f64).round() as usize];
+        println!(
+            "{name:13} {n:5}  {mb:8.2} | {mk:8.2} | {:+7.2}            {:8.2}         {p90:8.2}          {base_ok:2}/{n} | {kin_ok:2}/{n}   (model load + description {load_ms:.0} ms)",
+            mk - mb,
+            median(&mut fin),
+        );
+    }
+}

@@ -1,0 +1,122 @@
+//! The shared hands (../shared/testdata/hands) imported at start with `--import-hand`, planned
+//! by the real binary on single-view YCB clouds over gRPC: every plan names every joint of the
+//! model with an angle inside its limits and carries per-contact IK residuals; feasible plans
+//! reach their contacts within 5 mm and their final configuration stays clear of the support
+//! plane (1 mm tolerance); every hand gets at least one feasible plan.
+
+use graspd_core::hand::kinematics::KinematicHand;
+use graspd_e2e::{Server, packed};
+use graspd_proto::v1 as pb;
+use graspd_testkit::view::standard_view;
+use graspd_testkit::ycb::Object;
+
+const HANDS: [(&str, &str); 4] = [
+    ("shadow_mjcf", "shadow_hand/right_hand.xml"),
+    ("allegro", "wonik_allegro/right_hand.xml"),
+    ("robotiq_2f85", "robotiq_2f85/2f85.xml"),
+    ("barrett_mjcf", "barrett/wam_barrett_gripper.xml"),
+];
+
+fn v3(x: f64, y: f64, z: f64) -> pb::Vec3 {
+    pb::Vec3 { x, y, z }
+}
+
+#[tokio::test]
+async fn shared_hands_plan_on_ycb_views_with_joints_inside_limits() {
+    let dir = graspd_testkit::testdata_dir().join("hands");
+    let flags: Vec<String> = HANDS
+        .iter()
+        .flat_map(|(name, file)| {
+            [
+                "--import-hand".to_string(),
+                format!("{name}={}", dir.join(file).display()),
+            ]
+        })
+        .collect();
+    let flags: Vec<&str> = flags.iter().map(String::as_str).collect();
+    let server = Server::start_with(&flags);
+    let mut grpc = server.grpc().await;
+    for (name, file) in HANDS {
+        let model = KinematicHand::from_mjcf_file(dir.join(file)).unwrap();
+        let mut feasible = 0;
+        for object in [
+            Object::MustardBottle,
+            Object::ChipsCan,
+            Object::TomatoSoupCan,
+            Object::Apple,
+        ] {
+            let view = standard_view(object, 2000, 1);
+            let vp = view.viewpoint;
+            let pl = view.support_plane;
+            let request = pb::PlanGraspRequest {
+                input: Some(pb::plan_grasp_request::Input::Cloud(pb::PointCloud {
+                    points: packed(&view.object_cloud().points),
+                    normals: Vec::new(),
+                    frame_id: "world".into(),
+                })),
+                hand: Some(pb::plan_grasp_request::Hand::HandName(name.into())),
+                options: Some(pb::PlannerOptions {
+                    seed: Some(1),
+                    ..Default::default()
+                }),
+                hints: Some(pb::PlanHints {
+                    support_plane: Some(pb::Plane {
+                        normal: Some(v3(pl.normal.x, pl.normal.y, pl.normal.z)),
+                        offset: pl.offset,
+                    }),
+                    viewpoint: Some(v3(vp.x, vp.y, vp.z)),
+                    ..Default::default()
+                }),
+            };
+            let plan = grpc
+                .plan_grasp(request)
+                .await
+                .unwrap_or_else(|e| panic!("{name} {object}: {e}"))
+                .into_inner();
+            let what = format!("{name} on {object}");
+            assert_eq!(plan.joints.len(), model.tree.joints.len(), "{what}");
+            for (j, joint) in plan.joints.iter().zip(&model.tree.joints) {
+                assert_eq!(j.name, joint.name, "{what}");
+                let (lo, hi) = joint.limits();
+                assert!(
+                    j.angle >= lo - 1e-9 && j.angle <= hi + 1e-9,
+                    "{what}: {} = {} outside [{lo}, {hi}]",
+                    j.name,
+                    j.angle
+                );
+            }
+            for c in &plan.contacts {
+                assert_eq!(c.ik_residual.is_some(), c.finger != "palm", "{what}");
+            }
+            let collision = plan.collision.unwrap();
+            println!(
+                "{what}: feasible={} residuals={:?} final_plane_clearance={:?} reason={:?}",
+                plan.feasible,
+                plan.contacts
+                    .iter()
+                    .map(|c| c.ik_residual)
+                    .collect::<Vec<_>>(),
+                collision.final_plane_clearance,
+                plan.infeasible_reason
+            );
+            if plan.feasible {
+                feasible += 1;
+                for c in &plan.contacts {
+                    assert!(c.ik_residual.is_none_or(|r| r <= 0.005), "{what}: {c:?}");
+                }
+                let clearance = collision.final_plane_clearance.unwrap();
+                assert!(
+                    clearance >= -0.001,
+                    "{what}: {clearance} m through the table"
+                );
+                assert!(collision.final_points_in_collision < 3, "{what}");
+            } else {
+                assert!(plan.infeasible_reason.is_some(), "{what}");
+            }
+        }
+        assert!(
+            feasible >= 1,
+            "{name}: no feasible plan on the four objects"
+        );
+    }
+}
