@@ -5,6 +5,8 @@
 //!   standing on the table plane z = 0 (origin not centred: see the objects README).
 //! - [`render`]: a pinhole depth sensor that ray-casts a mesh (and optionally a finite table
 //!   patch at z = 0) and returns a single-view cloud in the world frame.
+//! - [`rgbd`]: RGB-D frames (colour, depth, ground-truth labels) of objects on a table, for
+//!   the perception tests.
 //! - [`sample`]: seeded downsampling and whole-surface sampling with outward normals.
 //! - [`view`]: [`standard_view`], the one call most tests use.
 //!
@@ -15,6 +17,7 @@
 //! ```
 
 pub mod render;
+pub mod rgbd;
 pub mod sample;
 pub mod view;
 pub mod ycb;
