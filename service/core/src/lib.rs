@@ -1,5 +1,6 @@
-//! graspd domain: hands, point clouds, RGB-D perception and the dual-stage pregrasping-opposition planner of the
-//! dissertation (method.md). Plain Rust: no transport, async runtime or proto types here.
+//! graspd domain: hands, point clouds, RGB-D perception and the dual-stage
+//! pregrasping-opposition planner of the dissertation (method.md). Plain Rust: no transport,
+//! async runtime or proto types here.
 
 pub mod cloud;
 pub mod error;
