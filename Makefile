@@ -5,6 +5,10 @@ ARGS ?=
 
 .PHONY: build run test fmt lint fuzz
 
+# The ONNX Runtime library that ort loads at run time (grasp-type model, docs/model-contract.md);
+# `run` and `test` fetch it first with scripts/fetch-onnxruntime.sh.
+run test: export ORT_DYLIB_PATH = $(CURDIR)/.tools/onnxruntime/libonnxruntime.so.1.31.1
+
 build:
 	$(CARGO) build --bins
 
@@ -19,10 +23,12 @@ HAND_IMPORTS = $(if $(wildcard $(HANDS)/shadow_hand/right_hand.xml),\
 # graspd with the built-in defaults (gRPC 0.0.0.0:50051, REST 0.0.0.0:8080), the shared hands
 # imported when present, and registered hands kept in .hands/.
 run:
+	scripts/fetch-onnxruntime.sh
 	$(CARGO) run --bin graspd -- --hands-dir .hands $(HAND_IMPORTS) $(ARGS)
 
 # The end-to-end tests start the real binaries, so build them first.
 test:
+	scripts/fetch-onnxruntime.sh
 	$(CARGO) build --bins
 	$(CARGO) test --workspace
 	scripts/python-client-test.sh

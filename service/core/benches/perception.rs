@@ -2,14 +2,22 @@
 //! YCB meshes (tomato soup can and mustard bottle on a table): decoding (raw rgb8 + 16UC1, and
 //! PNG + 16-bit PNG), back-projection to a cloud, segmentation (RANSAC support plane, Euclidean
 //! clustering, target choice), the VOCUS2 saliency map, and decode + cloud + segmentation
-//! with and without saliency.
+//! with and without saliency; the mean-shift ROI; the whole chain to Ω without a model and with
+//! a 4→16→16→6 3 × 3 FCN through ONNX Runtime (1 thread; needs `ORT_DYLIB_PATH`, else those
+//! rows are skipped); and Ω plus the plan.
 //! `cargo bench -p graspd-core --bench perception`.
+
+#[path = "../tests/common/onnx_builder.rs"]
+mod onnx_builder;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use graspd_core::perception::{
-    CameraIntrinsics, CloudFrame, ColorEncoding, DepthEncoding, ImageData, RgbdFrame, RgbdLimits,
-    SaliencyParams, SegmentationParams, TargetHint, depth_to_cloud, saliency_map, segment,
+    CameraIntrinsics, CloudFrame, ColorEncoding, DepthEncoding, GraspTypeModel, ImageData,
+    InformationParams, RegionParams, RgbdFrame, RgbdLimits, SaliencyParams, SegmentationParams,
+    TargetHint, depth_to_cloud, grasp_information, init_onnx_runtime, saliency_map,
+    salient_regions, segment,
 };
+use graspd_core::{HandCatalog, PlanHints, PlanInput, PlannerOptions, plan};
 use graspd_testkit::Object;
 use graspd_testkit::rgbd::{RgbdRender, RgbdScene, SceneObject};
 use image::{ImageEncoder, codecs::png::PngEncoder};
@@ -120,6 +128,65 @@ fn bench_perception(c: &mut Criterion) {
             black_box(segment(&c, TargetHint::Auto, None, None, &params).unwrap())
         })
     });
+    let map = saliency_map(&decoded.rgb, decoded.width, decoded.height, &sal);
+    g.bench_function("mean_shift_regions", |b| {
+        b.iter(|| black_box(salient_regions(&map, &RegionParams::default())))
+    });
+    let info_params = InformationParams::default();
+    let model = init_onnx_runtime(None).ok().map(|()| {
+        let path =
+            std::env::temp_dir().join(format!("graspd-bench-fcn-{}.onnx", std::process::id()));
+        std::fs::write(&path, onnx_builder::small_fcn(4).build()).unwrap();
+        GraspTypeModel::load(&path, 1).unwrap()
+    });
+    if model.is_none() {
+        eprintln!("ORT_DYLIB_PATH unset or unloadable: the model rows are skipped");
+    }
+    let hand = HandCatalog::builtin().get("shadow").cloned().unwrap();
+    let realisable = hand.realisable_types();
+    for (name, m) in [("no_model", None), ("fcn_4_16_16_6", model.as_ref())] {
+        if name != "no_model" && m.is_none() {
+            continue;
+        }
+        if let Some(m) = m {
+            g.bench_function("model_inference_1_thread", |b| {
+                b.iter(|| black_box(m.infer(&decoded).unwrap()))
+            });
+        }
+        g.bench_function(format!("grasp_information_{name}"), |b| {
+            b.iter(|| {
+                let d = raw.decode("rgbd", &lim).unwrap();
+                black_box(
+                    grasp_information(&d, TargetHint::Auto, None, m, &realisable, &info_params)
+                        .unwrap(),
+                )
+            })
+        });
+        g.bench_function(format!("rgbd_plan_shadow_{name}"), |b| {
+            b.iter(|| {
+                let d = raw.decode("rgbd", &lim).unwrap();
+                let info =
+                    grasp_information(&d, TargetHint::Auto, None, m, &realisable, &info_params)
+                        .unwrap();
+                black_box(
+                    plan(PlanInput {
+                        cloud: info.object,
+                        hand: hand.clone(),
+                        hints: PlanHints {
+                            support_plane: info.plane,
+                            viewpoint: Some(info.viewpoint),
+                            attention_point: info.attention_point,
+                            detected_types: info.detection.map(|d| d.probabilities),
+                            ..Default::default()
+                        },
+                        options: PlannerOptions::default(),
+                        kinematics: None,
+                    })
+                    .unwrap(),
+                )
+            })
+        });
+    }
     g.finish();
 }
 

@@ -4,9 +4,9 @@
 //! choice of the target by hints.
 
 use graspd_core::perception::{
-    CameraIntrinsics, CloudFrame, ColorEncoding, DecodedFrame, DepthEncoding, ImageData, RgbdFrame,
-    RgbdLimits, SaliencyParams, SegmentationParams, TargetChoice, TargetHint, depth_to_cloud,
-    saliency_map, segment,
+    CameraIntrinsics, CloudFrame, ColorEncoding, DecodedFrame, DepthEncoding, ImageData,
+    InformationParams, RgbdFrame, RgbdLimits, SaliencyParams, SegmentationParams, TargetChoice,
+    TargetHint, depth_to_cloud, grasp_information, saliency_map, segment,
 };
 use graspd_testkit::Object;
 use graspd_testkit::rgbd::{RgbdRender, RgbdScene, SceneObject};
@@ -392,5 +392,92 @@ fn without_a_hint_the_most_salient_object_is_the_target() {
         assert_eq!(s.choice, TargetChoice::Saliency);
         let score = iou(&s.mask, &r.object_mask(k));
         assert!(score >= 0.8, "red object {k}: IoU {score:.3}");
+    }
+}
+
+/// The whole chain of method.md §4 without a model, then the planner on its output: the target
+/// is the object, the ROI lies on it and covers most of it, the hint pixel's attention point is
+/// on the mesh, and the plan's contacts are object points.
+#[test]
+fn grasp_information_then_a_plan_for_each_table_5_2_object() {
+    let hand = graspd_core::HandCatalog::builtin()
+        .get("parallel_gripper")
+        .cloned()
+        .unwrap();
+    for object in Object::TABLE_5_2 {
+        let r = RgbdScene::on_table(vec![SceneObject::new(object, 0.0, 0.0, RED)])
+            .render()
+            .unwrap();
+        let frame = decode(&raw_frame(&r, true));
+        let truth = r.object_mask(0);
+        let (u, v) = r.object_pixel(0);
+        for hint in [TargetHint::Auto, TargetHint::Pixel { u, v }] {
+            let info = grasp_information(
+                &frame,
+                hint,
+                None,
+                None,
+                &hand.realisable_types(),
+                &InformationParams::default(),
+            )
+            .unwrap();
+            let on_object = info
+                .roi
+                .iter()
+                .zip(&truth)
+                .filter(|(a, b)| **a && **b)
+                .count();
+            let truth_n = truth.iter().filter(|t| **t).count();
+            let precision = on_object as f64 / info.roi_pixels.max(1) as f64;
+            let coverage = on_object as f64 / truth_n as f64;
+            eprintln!(
+                "{object} {hint:?}: ROI {:?} {} px, precision {precision:.3}, coverage {coverage:.3}, {:.1} ms",
+                info.roi_box,
+                info.roi_pixels,
+                info.timings.total * 1e3
+            );
+            assert!(precision >= 0.98, "{object}: ROI precision {precision:.3}");
+            assert!(
+                coverage >= 0.75,
+                "{object}: ROI covers {coverage:.3} of the object"
+            );
+            assert!(info.detection.is_none() && info.model_error.is_none());
+            match hint {
+                TargetHint::Auto => {
+                    assert_eq!(info.target_choice, TargetChoice::Saliency);
+                    assert!(info.attention_point.is_none());
+                }
+                _ => {
+                    assert_eq!(info.target_choice, TargetChoice::Pixel);
+                    let p = info.attention_point.unwrap();
+                    let d = r.distance_to_object(0, &p);
+                    assert!(d <= 0.003, "{object}: attention point {d} m off the mesh");
+                    let (au, av) = info.attention_pixel.unwrap();
+                    assert!((au - u as f64).abs() <= 3.0 && (av - v as f64).abs() <= 3.0);
+                }
+            }
+            let plan = graspd_core::plan(graspd_core::PlanInput {
+                cloud: info.object.clone(),
+                hand: hand.clone(),
+                hints: graspd_core::PlanHints {
+                    support_plane: info.plane,
+                    viewpoint: Some(info.viewpoint),
+                    attention_point: info.attention_point,
+                    ..Default::default()
+                },
+                options: graspd_core::PlannerOptions::default(),
+                kinematics: None,
+            })
+            .unwrap();
+            for c in &plan.contacts {
+                let d = r.distance_to_object(0, &c.position);
+                assert!(d <= 0.003, "{object}: contact {d} m off the mesh");
+            }
+            assert!(plan.collision.min_plane_clearance.is_some());
+            eprintln!(
+                "  plan: {} feasible {} S {:.3}",
+                plan.grasp_type, plan.feasible, plan.quality.gii
+            );
+        }
     }
 }

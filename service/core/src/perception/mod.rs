@@ -5,20 +5,42 @@
 //!   `16UC1`/`32FC1`/16-bit PNG depth, intrinsics, depth scale, camera-to-world) and its
 //!   validated decoding into a [`DecodedFrame`].
 //! - [`depth_to_cloud`]: back-projection of the valid depth pixels into a [`PixelCloud`].
+//! - [`grasp_type_detection`]: the grasp-type network (ch. 4.2.2, ONNX Runtime): six per-pixel
+//!   probability maps, P(s|O) over the object's region (Eq 4.3), the chosen type and the
+//!   attention point.
 //! - [`saliency`]: the VOCUS2 saliency map (ch. 4.2.1); the most salient object is the default
 //!   target.
 //! - [`segmentation`]: support-plane removal, Euclidean clustering and the choice of the target
 //!   object (hint pixel, hint box, saliency, image centre).
+//! - [`roi`]: mean-shift regions of the saliency map; the ROI.
+//! - [`overlay`]: the picture of a plan for people.
+//! - [`information`]: the whole chain from a decoded frame to Ω = {ROI, grasp type, attention
+//!   point}.
 
 pub mod depth_to_cloud;
+pub mod grasp_type_detection;
+pub mod information;
+pub mod overlay;
 pub mod rgbd;
+pub mod roi;
 pub mod saliency;
 pub mod segmentation;
 
 pub use depth_to_cloud::{CloudFrame, PixelCloud, back_project, depth_to_cloud};
+pub use grasp_type_detection::{
+    GraspTypeModel, ModelError, TypeMaps, attention_pixel, back_project_attention, choose_type,
+    init_onnx_runtime, type_probabilities,
+};
+pub use information::{
+    GraspInformation, InformationParams, PerceptionReport, PerceptionTimings, ProbabilityMaps,
+    TypeDetection, grasp_information,
+};
+pub use overlay::{draw_overlay, project};
 pub use rgbd::{
     CameraIntrinsics, ColorEncoding, DecodedFrame, DepthEncoding, ImageData, RgbdFrame, RgbdLimits,
+    declared_size, frame_size,
 };
+pub use roi::{RegionParams, SalientRegions, mask_box, region_of_interest, salient_regions};
 pub use saliency::{Plane32, SaliencyParams, saliency_map};
 pub use segmentation::{
     Cluster, Segmentation, SegmentationParams, TargetChoice, TargetHint, euclidean_clusters,

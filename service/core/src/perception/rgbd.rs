@@ -289,6 +289,59 @@ impl RgbdFrame {
     }
 }
 
+/// The size an image of the frame declares: `width × height` when both are given, else (0, 0)
+/// for a PNG / JPEG, whose header is read. Errors name `{field}.width` / `{field}.data`.
+pub fn declared_size(
+    width: u32,
+    height: u32,
+    data: &[u8],
+    compressed: bool,
+    field: &str,
+) -> Result<(usize, usize), FieldError> {
+    if width > 0 && height > 0 {
+        return Ok((width as usize, height as usize));
+    }
+    if !compressed || (width, height) != (0, 0) {
+        return Err(FieldError::new(
+            format!("{field}.{}", if width == 0 { "width" } else { "height" }),
+            format!(
+                "the image is {width}×{height}; both sides must be > 0 (they may be left 0 only \
+                 for png or jpeg, whose size is read from the file)"
+            ),
+        ));
+    }
+    let dims = ImageReader::new(Cursor::new(data))
+        .with_guessed_format()
+        .ok()
+        .and_then(|r| r.into_dimensions().ok())
+        .ok_or_else(|| {
+            FieldError::new(
+                format!("{field}.data"),
+                format!("not a readable PNG or JPEG ({} bytes)", data.len()),
+            )
+        })?;
+    Ok((dims.0 as usize, dims.1 as usize))
+}
+
+/// The frame's size from its two images' (see [`declared_size`]): they must agree (colour and
+/// depth registered to one size). `field` names the frame (e.g. `rgbd`).
+pub fn frame_size(
+    color: (usize, usize),
+    depth: (usize, usize),
+    field: &str,
+) -> Result<(usize, usize), FieldError> {
+    if color != depth {
+        return Err(FieldError::new(
+            format!("{field}.depth"),
+            format!(
+                "the depth image is {}×{} but the colour image is {}×{}; register them to one size",
+                depth.0, depth.1, color.0, color.1
+            ),
+        ));
+    }
+    Ok(color)
+}
+
 /// Checks the byte count of a raw image and returns its row stride.
 fn raw_rows(
     data: &[u8],

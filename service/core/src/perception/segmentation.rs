@@ -79,12 +79,32 @@ pub enum TargetHint {
 }
 
 /// What decided the target.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum TargetChoice {
     Pixel,
     Region,
     Saliency,
     ImageCentre,
+}
+
+impl TargetChoice {
+    /// The API name (`pixel`, `region`, `saliency`, `image_centre`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Pixel => "pixel",
+            Self::Region => "region",
+            Self::Saliency => "saliency",
+            Self::ImageCentre => "image_centre",
+        }
+    }
+
+    /// The inverse of [`Self::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        [Self::Pixel, Self::Region, Self::Saliency, Self::ImageCentre]
+            .into_iter()
+            .find(|c| c.name() == name)
+    }
 }
 
 /// One object cluster: indices into the [`PixelCloud`].

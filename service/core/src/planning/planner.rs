@@ -176,6 +176,18 @@ fn separate_support_plane(
     })
 }
 
+/// The most probable of `among` under `p` (ties: the first in the dissertation's order).
+fn argmax_type(p: &[f64; 6], among: &[GraspType]) -> GraspType {
+    among
+        .iter()
+        .copied()
+        .fold(None::<GraspType>, |best, t| match best {
+            Some(b) if p[b.index()] >= p[t.index()] => Some(b),
+            _ => Some(t),
+        })
+        .unwrap_or(GraspType::Pinch)
+}
+
 /// Plans a grasp (Algorithm 4). Deterministic for a given input and seed.
 pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
     let t_start = Instant::now();
@@ -220,14 +232,27 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
 
     let t = Instant::now();
     let shape = ObjectShape::of(points);
-    let (requested, type_source) = match hints.grasp_type {
-        Some(t) => (t, TypeSource::Request),
-        None => (
+    let mut type_scores = [0.0; 6];
+    let (requested, type_source) = match (hints.grasp_type, hints.detected_types) {
+        (Some(t), _) => (t, TypeSource::Request),
+        (None, Some(p)) => {
+            type_scores = p;
+            (argmax_type(&p, &GraspType::ALL), TypeSource::Model)
+        }
+        (None, None) => (
             type_rule::grasp_type_by_rule(&shape),
             TypeSource::GeometricRule,
         ),
     };
-    let grasp = if type_source == TypeSource::Request {
+    let grasp = if type_source == TypeSource::Model {
+        // s* = argmax over the types the hand realises (method.md §4).
+        hand.resolve_forced(argmax_type(&type_scores, &hand.realisable_types()))
+            .map(|mut g| {
+                g.requested = requested;
+                g
+            })
+            .unwrap_or_else(|| hand.resolve_detected(requested))
+    } else if type_source == TypeSource::Request {
         hand.resolve_forced(requested).ok_or_else(|| {
             FieldError::new(
                 "hints.grasp_type",
@@ -277,8 +302,9 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         None => type_rule::attention_point_by_rule(&shape, points, &rule_approach),
     };
     let (p_att, n_att) = (points[att], normals.get(att));
-    let mut type_scores = [0.0; 6];
-    type_scores[requested.index()] = 1.0;
+    if type_source != TypeSource::Model {
+        type_scores[requested.index()] = 1.0;
+    }
     let t_type = t.elapsed().as_secs_f64();
 
     let mut approach_prefs = vec![-n_att, rule_approach];
@@ -449,6 +475,7 @@ fn assemble(
         mode: options.mode,
         seed: options.seed,
         warnings,
+        perception: None,
     })
 }
 

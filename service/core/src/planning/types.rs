@@ -119,6 +119,9 @@ pub struct PlanHints {
     pub viewpoint: Option<Point3<f64>>,
     /// Which way is up, when no support plane is known.
     pub up: Option<Vector3<f64>>,
+    /// P(s|O) for s = 1..6 from the grasp-type model over the ROI (Eq 4.3): the planner takes
+    /// s* as the most probable type the hand realises. Ignored when `grasp_type` is set.
+    pub detected_types: Option<[f64; 6]>,
 }
 
 /// Who decided the grasp type.
@@ -280,4 +283,7 @@ pub struct GraspPlan {
     pub mode: PlannerMode,
     pub seed: u64,
     pub warnings: Vec<String>,
+    /// What perception found, when the input was an RGB-D frame.
+    #[serde(default)]
+    pub perception: Option<crate::perception::PerceptionReport>,
 }
