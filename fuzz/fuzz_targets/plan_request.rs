@@ -21,6 +21,6 @@ fuzz_target!(|data: &[u8]| {
             let _ = plan_request_from_proto(request, &limits);
         }
     } else if let Ok(request) = json::parse::<PlanRequestJson>(rest, "body") {
-        let _ = plan_request_from_json(request, None, &limits);
+        let _ = plan_request_from_json(request, None, Default::default(), &limits);
     }
 });

@@ -240,6 +240,7 @@ pub fn grpc_request_with_points(points: Vec<u8>, hand: &str, seed: u64) -> pb::P
             support_plane: Some(table_plane()),
             ..Default::default()
         }),
+        output: None,
     }
 }
 

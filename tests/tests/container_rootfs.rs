@@ -6,6 +6,9 @@
 //! library the slim base image lacks fails here.
 
 use graspd_e2e::{binary, http};
+
+#[path = "../../service/core/tests/common/onnx_builder.rs"]
+mod onnx_builder;
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -95,12 +98,16 @@ fn assemble(root: &Path) -> Image {
                     _ => panic!("unexpected COPY: {line}"),
                 };
                 let source = if from_builder {
-                    let name = src.strip_prefix("/src/target/release/").unwrap_or_else(|| {
-                        panic!("the builder only provides release binaries: {line}")
-                    });
-                    // `make test` builds debug binaries; the image's are the release build of the
-                    // same sources.
-                    binary(name, &format!("{}_BIN", name.to_uppercase()))
+                    match src.strip_prefix("/src/target/release/") {
+                        // `make test` builds debug binaries; the image's are the release build
+                        // of the same sources.
+                        Some(name) => binary(name, &format!("{}_BIN", name.to_uppercase())),
+                        // What the builder fetched into the checkout (`make test` fetches it
+                        // too, e.g. .tools/onnxruntime).
+                        None => repo().join(src.strip_prefix("/src/").unwrap_or_else(|| {
+                            panic!("the builder's files are under /src: {line}")
+                        })),
+                    }
                 } else {
                     repo().join(src)
                 };
@@ -155,11 +162,15 @@ fn the_runtime_image_links_only_what_debian_slim_has() {
         "librt.so.1",
         "ld-linux-x86-64.so.2",
     ];
-    for name in ["graspd", "graspctl"] {
-        let out = Command::new("ldd")
-            .arg(binary(name, &format!("{}_BIN", name.to_uppercase())))
-            .output()
-            .expect("ldd");
+    // libstdc++ too, for ONNX Runtime (apt itself depends on it in the slim image).
+    let ort = repo().join(".tools/onnxruntime/libonnxruntime.so.1.31.1");
+    let with_cxx = [&allowed[..], &["libstdc++.so.6"]].concat();
+    for (name, path, allowed) in [
+        ("graspd", binary("graspd", "GRASPD_BIN"), &allowed[..]),
+        ("graspctl", binary("graspctl", "GRASPCTL_BIN"), &allowed[..]),
+        ("libonnxruntime", ort, &with_cxx[..]),
+    ] {
+        let out = Command::new("ldd").arg(&path).output().expect("ldd");
         let text = String::from_utf8_lossy(&out.stdout);
         for lib in text.lines().filter_map(|l| l.split_whitespace().next()) {
             let file = lib.rsplit('/').next().unwrap();
@@ -198,6 +209,16 @@ async fn graspd_starts_from_the_assembled_image_and_passes_its_healthcheck() {
     command
         .env("GRASPD_GRPC_ADDR", "127.0.0.1:0")
         .env("GRASPD_REST_ADDR", "127.0.0.1:0");
+    // A grasp-type model (the contract's smallest: a 1×1 convolution) proves that the image's
+    // ONNX Runtime loads.
+    let model = root.join("model.onnx");
+    let weights = vec![vec![0.0f32; 3]; 6];
+    std::fs::write(
+        &model,
+        onnx_builder::conv1x1_model(3, &weights, &[0.0; 6], 1, None, None).build(),
+    )
+    .unwrap();
+    command.env("GRASPD_GRASP_TYPE_MODEL", &model);
     let mut child = command.spawn().expect("start graspd from the image root");
     let stdout = child.stdout.take().unwrap();
     let (tx, rx) = std::sync::mpsc::channel();

@@ -67,6 +67,7 @@ async fn shared_hands_plan_on_ycb_views_with_joints_inside_limits() {
                     viewpoint: Some(v3(vp.x, vp.y, vp.z)),
                     ..Default::default()
                 }),
+                output: None,
             };
             let plan = grpc
                 .plan_grasp(request)

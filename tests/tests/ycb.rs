@@ -65,6 +65,7 @@ async fn ycb_objects_with_every_builtin_hand_over_grpc_and_rest() {
                     viewpoint: Some(v3(&vp)),
                     ..Default::default()
                 }),
+                output: None,
             };
             let grpc = server.grpc().await.plan_grasp(request).await;
             let grpc = plan_from_proto(

@@ -7,10 +7,13 @@ mod summary;
 use clap::{Args, Parser, Subcommand};
 use graspd::grpc::convert;
 use graspd::rest::json::{HandJson, HandsJson, PlanResponseJson};
-use graspd::{HandChoice, ImageHints, PlanRequest, PlanSource};
+use graspd::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
 use graspd_core::cloud::Plane;
 use graspd_core::cloud::io::read_cloud_file;
 use graspd_core::hand::parse_hand_toml;
+use graspd_core::perception::{
+    CameraIntrinsics, ColorEncoding, DepthEncoding, ImageData, RgbdFrame, declared_size, frame_size,
+};
 use graspd_core::planning::PlannerMode;
 use graspd_core::{FieldError, GraspType, PlanHints, PlannerOptions};
 use graspd_proto::v1 as pb;
@@ -45,7 +48,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Plan a grasp on a point-cloud file (PCD or PLY, ASCII or binary).
+    /// Plan a grasp on a point-cloud file (PCD or PLY, ASCII or binary) or an RGB-D frame (a PNG
+    /// or JPEG colour image and a 16-bit PNG depth image).
     Plan(PlanArgs),
     /// List the server's hands, or show one.
     Hands {
@@ -60,8 +64,34 @@ enum Command {
 #[derive(Debug, Args)]
 struct PlanArgs {
     /// The cloud file (PCD or PLY), in metres.
-    #[arg(long, value_name = "FILE")]
-    cloud: PathBuf,
+    #[arg(
+        long,
+        value_name = "FILE",
+        required_unless_present = "rgb",
+        conflicts_with = "rgb"
+    )]
+    cloud: Option<PathBuf>,
+    /// The colour image of an RGB-D frame (PNG or JPEG), registered to --depth.
+    #[arg(long, value_name = "FILE", requires_all = ["depth", "intrinsics"])]
+    rgb: Option<PathBuf>,
+    /// The depth image (16-bit PNG, millimetres unless --depth-scale says otherwise).
+    #[arg(long, value_name = "FILE", requires = "rgb")]
+    depth: Option<PathBuf>,
+    /// Pinhole intrinsics of the frame, fx,fy,cx,cy (pixels).
+    #[arg(long, value_name = "FX,FY,CX,CY", value_parser = parse_numbers::<4>)]
+    intrinsics: Option<[f64; 4]>,
+    /// Metres per depth unit (default 0.001).
+    #[arg(long, value_name = "M")]
+    depth_scale: Option<f64>,
+    /// The object at this pixel is the target, and the attention point lies there: u,v.
+    #[arg(long, value_name = "U,V", value_parser = parse_numbers::<2>, requires = "rgb")]
+    pixel: Option<[f64; 2]>,
+    /// The object with most pixels in this box is the target: u_min,v_min,u_max,v_max.
+    #[arg(long, value_name = "U0,V0,U1,V1", value_parser = parse_numbers::<4>, requires = "rgb")]
+    region: Option<[f64; 4]>,
+    /// Write the overlay (ROI, attention point, heat map, contacts, opposition) to this PNG.
+    #[arg(long, value_name = "FILE", requires = "rgb")]
+    overlay: Option<PathBuf>,
     /// A hand of the server (see `graspctl hands`).
     #[arg(
         long,
@@ -134,6 +164,11 @@ pub(crate) enum CliError {
     Status(#[from] tonic::Status),
     #[error("the server's answer is malformed: {0}")]
     Answer(FieldError),
+    #[error("cannot write {path}: {source}")]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("cannot write JSON: {0}")]
     Json(#[from] serde_json::Error),
 }
@@ -154,11 +189,64 @@ async fn connect(server: &str) -> Result<GraspPlannerClient<Channel>, CliError> 
         })
 }
 
-fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
-    let cloud = read_cloud_file(&read(&args.cloud)?).map_err(|error| CliError::File {
-        path: args.cloud.clone(),
+/// The encoding of an image file by its magic bytes (the server checks it).
+fn file_encoding(data: &[u8]) -> &'static str {
+    if data.starts_with(&[0xFF, 0xD8]) {
+        "jpeg"
+    } else {
+        "png"
+    }
+}
+
+fn build_source(args: &PlanArgs) -> Result<PlanSource, CliError> {
+    let (Some(rgb), Some(depth), Some([fx, fy, cx, cy])) =
+        (&args.rgb, &args.depth, args.intrinsics)
+    else {
+        let path = args.cloud.as_ref().expect("clap requires --cloud or --rgb");
+        let cloud = read_cloud_file(&read(path)?).map_err(|error| CliError::File {
+            path: path.clone(),
+            error,
+        })?;
+        return Ok(PlanSource::Cloud(cloud));
+    };
+    let (color, depth) = (read(rgb)?, read(depth)?);
+    let file = |path: &PathBuf, error| CliError::File {
+        path: path.clone(),
         error,
-    })?;
+    };
+    let color_encoding =
+        ColorEncoding::parse(file_encoding(&color), "color").map_err(|e| file(rgb, e))?;
+    let color_size = declared_size(0, 0, &color, true, "color").map_err(|e| file(rgb, e))?;
+    let depth_path = args.depth.as_ref().expect("checked above");
+    let depth_size = declared_size(0, 0, &depth, true, "depth").map_err(|e| file(depth_path, e))?;
+    let (width, height) =
+        frame_size(color_size, depth_size, "frame").map_err(|e| file(depth_path, e))?;
+    Ok(PlanSource::Rgbd(Box::new(RgbdFrame {
+        color: ImageData {
+            encoding: color_encoding,
+            data: color,
+            step: 0,
+        },
+        depth: ImageData {
+            encoding: DepthEncoding::Png16,
+            data: depth,
+            step: 0,
+        },
+        width,
+        height,
+        intrinsics: CameraIntrinsics { fx, fy, cx, cy },
+        depth_scale: args.depth_scale,
+        camera_to_world: None,
+    })))
+}
+
+/// A pixel coordinate given on the command line.
+fn pixel(v: f64) -> u32 {
+    v.round().clamp(0.0, u32::MAX as f64) as u32
+}
+
+fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
+    let source = build_source(args)?;
     let hand = match (&args.hand, &args.hand_file) {
         (_, Some(path)) => {
             let text = String::from_utf8_lossy(&read(path)?).into_owned();
@@ -173,7 +261,7 @@ fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
         (None, None) => unreachable!("clap requires --hand or --hand-file"),
     };
     Ok(PlanRequest {
-        source: PlanSource::Cloud(cloud),
+        source,
         hand,
         options: PlannerOptions {
             seed: args.seed,
@@ -190,8 +278,17 @@ fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
             support_plane: args.support_plane,
             viewpoint: args.viewpoint,
             up: None,
+            detected_types: None,
         },
-        image_hints: ImageHints::default(),
+        image_hints: ImageHints {
+            attention_pixel: args.pixel.map(|[u, v]| (pixel(u), pixel(v))),
+            region: args.region.map(|r| r.map(pixel)),
+            most_salient: false,
+        },
+        output: OutputOptions {
+            probability_maps_max_side: 0,
+            overlay: args.overlay.is_some(),
+        },
     })
 }
 
@@ -203,6 +300,17 @@ async fn run(cli: Cli) -> Result<(), CliError> {
             let mut client = connect(&cli.server).await?;
             let response = client.plan_grasp(request).await?.into_inner();
             let plan = convert::plan_from_proto(response).map_err(CliError::Answer)?;
+            if let Some(path) = &args.overlay {
+                let png = plan
+                    .perception
+                    .as_ref()
+                    .and_then(|p| p.overlay_png.as_deref())
+                    .ok_or_else(|| CliError::Answer(FieldError::new("overlay_png", "missing")))?;
+                std::fs::write(path, png).map_err(|source| CliError::Write {
+                    path: path.clone(),
+                    source,
+                })?;
+            }
             if cli.json {
                 println!(
                     "{}",

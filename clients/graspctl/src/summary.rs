@@ -139,6 +139,23 @@ pub fn plan(plan: &GraspPlan) -> String {
             let _ = writeln!(w, "support plane   none");
         }
     }
+    if let Some(p) = &plan.perception {
+        let [u0, v0, u1, v1] = p.roi;
+        let _ = writeln!(
+            w,
+            "perception      {}×{} frame, {} objects, target by {} ({} points), ROI u {u0}..{u1} v {v0}..{v1} ({} px){}, {:.1} ms",
+            p.width,
+            p.height,
+            p.objects,
+            p.target_source.name(),
+            p.object_points,
+            p.roi_pixels,
+            p.attention_pixel
+                .map(|[u, v]| format!(", attention pixel ({u:.0}, {v:.0})"))
+                .unwrap_or_default(),
+            p.timings.total * 1e3
+        );
+    }
     let c = &plan.collision;
     let collision = if !c.checked {
         "not checked".to_string()

@@ -108,14 +108,24 @@ def test_rgbd_frames_are_encoded_for_the_wire(server):
         rgbd_message(color, depth[:10], 60.0, 60.0, 32.0, 24.0)
     with pytest.raises(ValueError, match="depth"):
         rgbd_message(color, depth.astype(np.int32), 60.0, 60.0, 32.0, 24.0)
+    # A table 0.8 m below the camera and a red block 10 cm tall in the middle of the view.
+    h, w = 120, 160
+    color = np.full((h, w, 3), 150, np.uint8)
+    depth = np.full((h, w), 800, np.uint16)
+    color[50:70, 70:90] = (200, 40, 30)
+    depth[50:70, 70:90] = 700
     with Client(server.grpc) as c:
-        try:
-            plan = c.plan_rgbd(color, depth, 60.0, 60.0, 32.0, 24.0)
-        except grpc.RpcError as e:
-            # Until the perception issue lands the server says so; never a silent default.
-            assert e.code() in (grpc.StatusCode.UNIMPLEMENTED, grpc.StatusCode.INVALID_ARGUMENT)
-        else:
-            assert plan.contacts
+        plan = c.plan_rgbd(color, depth, 150.0, 150.0, 79.5, 59.5, hand="parallel_gripper")
+        assert plan.contacts and plan.type_source == "geometric_rule"
+        assert plan.perception.objects == 1 and plan.perception.target_source == "saliency"
+        roi = plan.perception.roi
+        assert (roi.u_min, roi.v_min, roi.u_max, roi.v_max) == (70, 50, 90, 70)
+        for contact in plan.contacts:
+            assert abs(contact.position.z - 0.7) <= 0.1  # on the block (camera frame)
+        with pytest.raises(grpc.RpcError) as e:
+            c.plan_rgbd(color, np.zeros((h, w), np.uint16), 150.0, 150.0, 79.5, 59.5)
+        assert e.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+        assert field_of(e.value) == "rgbd.depth.data"
 
 
 def raw_reading(t: int) -> Reading:

@@ -39,6 +39,20 @@ pub struct Cli {
     /// Tactile sessions open at once (streams and analyze calls); more are refused [default: 64].
     #[arg(long, env = "GRASPD_MAX_TACTILE_SESSIONS", value_name = "N")]
     pub max_tactile_sessions: Option<usize>,
+    /// Largest RGB-D frame, width × height pixels [default: 16777216 (4096²)].
+    #[arg(long, env = "GRASPD_MAX_IMAGE_PIXELS", value_name = "N")]
+    pub max_image_pixels: Option<usize>,
+    /// The grasp-type network (ONNX, docs/model-contract.md) for RGB-D input [default: none:
+    /// the geometric rule decides types]. A configured model that does not load or breaks the
+    /// contract stops the start.
+    #[arg(long, env = "GRASPD_GRASP_TYPE_MODEL", value_name = "FILE")]
+    pub grasp_type_model: Option<PathBuf>,
+    /// libonnxruntime.so (1.31) to load the model with [default: $ORT_DYLIB_PATH].
+    #[arg(long, env = "GRASPD_ONNXRUNTIME", value_name = "FILE")]
+    pub onnxruntime: Option<PathBuf>,
+    /// Threads of one model inference [default: 1].
+    #[arg(long, env = "GRASPD_MODEL_THREADS", value_name = "N")]
+    pub model_threads: Option<usize>,
     /// Log filter in tracing's EnvFilter syntax, e.g. `info` or `graspd=debug` [default: info].
     #[arg(long, env = "GRASPD_LOG", value_name = "FILTER")]
     pub log: Option<String>,
@@ -78,6 +92,10 @@ pub struct FileConfig {
     pub max_points: Option<usize>,
     pub max_concurrent_plans: Option<usize>,
     pub max_tactile_sessions: Option<usize>,
+    pub max_image_pixels: Option<usize>,
+    pub grasp_type_model: Option<PathBuf>,
+    pub onnxruntime: Option<PathBuf>,
+    pub model_threads: Option<usize>,
     pub log: Option<String>,
     pub log_format: Option<LogFormat>,
     pub hands_dir: Option<PathBuf>,
@@ -95,6 +113,12 @@ pub struct Settings {
     pub max_points: usize,
     pub max_concurrent_plans: usize,
     pub max_tactile_sessions: usize,
+    pub max_image_pixels: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grasp_type_model: Option<PathBuf>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub onnxruntime: Option<PathBuf>,
+    pub model_threads: usize,
     pub log: String,
     pub log_format: LogFormat,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -158,6 +182,13 @@ impl Settings {
                 .max_tactile_sessions
                 .or(file.max_tactile_sessions)
                 .unwrap_or(d.max_tactile_sessions),
+            max_image_pixels: cli
+                .max_image_pixels
+                .or(file.max_image_pixels)
+                .unwrap_or(d.max_image_pixels),
+            grasp_type_model: cli.grasp_type_model.clone().or(file.grasp_type_model),
+            onnxruntime: cli.onnxruntime.clone().or(file.onnxruntime),
+            model_threads: cli.model_threads.or(file.model_threads).unwrap_or(1),
             log: cli
                 .log
                 .clone()
@@ -203,6 +234,21 @@ impl Settings {
                 message: "must be at least 1".into(),
             });
         }
+        if self.max_image_pixels < 64 * 48 {
+            return Err(ConfigError::Invalid {
+                field: "max_image_pixels",
+                message: format!(
+                    "must be at least 3072 (64×48), got {}",
+                    self.max_image_pixels
+                ),
+            });
+        }
+        if self.model_threads == 0 || self.model_threads > 64 {
+            return Err(ConfigError::Invalid {
+                field: "model_threads",
+                message: format!("must be within 1..=64, got {}", self.model_threads),
+            });
+        }
         if self.max_tactile_sessions == 0 {
             return Err(ConfigError::Invalid {
                 field: "max_tactile_sessions",
@@ -230,6 +276,7 @@ impl Settings {
             max_points: self.max_points,
             max_concurrent_plans: self.max_concurrent_plans,
             max_tactile_sessions: self.max_tactile_sessions,
+            max_image_pixels: self.max_image_pixels,
         }
     }
 }

@@ -4,7 +4,11 @@
 
 use crate::hand_store::{self, HandUpload};
 use graspd_core::cloud::{Plane, PointCloud};
-use graspd_core::planning::KinematicModel;
+use graspd_core::perception::{
+    DecodedFrame, GraspInformation, GraspTypeModel, InformationParams, RgbdFrame, RgbdLimits,
+    TargetHint, draw_overlay, grasp_information,
+};
+use graspd_core::planning::{KinematicModel, PlaneSource};
 use graspd_core::tactile::{
     FingerConfig, Frame, FrameResult, LayoutSpec, SensorCatalog, SensorLayout, Stabilizer,
     StabilizerConfig, TareConfig,
@@ -33,6 +37,8 @@ pub struct Limits {
     /// Tactile sessions open at once (streams and analyze calls); more are refused
     /// (RESOURCE_EXHAUSTED, 503).
     pub max_tactile_sessions: usize,
+    /// Largest RGB-D frame, `width × height` pixels (also what a PNG or JPEG may decode to).
+    pub max_image_pixels: usize,
 }
 
 /// Default of [`Limits::max_tactile_sessions`].
@@ -45,6 +51,7 @@ impl Default for Limits {
             max_points: 500_000,
             max_concurrent_plans: std::thread::available_parallelism().map_or(2, |n| n.get()),
             max_tactile_sessions: DEFAULT_MAX_TACTILE_SESSIONS,
+            max_image_pixels: RgbdLimits::default().max_pixels,
         }
     }
 }
@@ -54,8 +61,8 @@ impl Default for Limits {
 pub enum PlanSource {
     /// A cloud as decoded at the edge; the facade validates it.
     Cloud(PointCloud),
-    /// An RGB-D frame. Not implemented yet: the facade answers `Unimplemented`.
-    Rgbd,
+    /// An RGB-D frame as received; the facade decodes and validates it (method.md §4).
+    Rgbd(Box<RgbdFrame>),
 }
 
 /// Which hand to plan for.
@@ -67,18 +74,103 @@ pub enum HandChoice {
     Inline(Box<HandDescription>),
 }
 
-/// Hints that only make sense on an image (RGB-D input). Any of them set answers `Unimplemented`
-/// rather than being ignored.
+/// Hints that only make sense on an image (RGB-D input); with a cloud they are refused rather
+/// than ignored.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct ImageHints {
-    pub attention_pixel: bool,
-    pub region: bool,
+    /// The object at this pixel (u, v), and the attention point there.
+    pub attention_pixel: Option<(u32, u32)>,
+    /// The object with most pixels in [u_min, u_max) × [v_min, v_max).
+    pub region: Option<[u32; 4]>,
+    /// The most salient object (the default without a pixel or region).
     pub most_salient: bool,
 }
 
 impl ImageHints {
     pub fn any(&self) -> bool {
-        self.attention_pixel || self.region || self.most_salient
+        self.field().is_some()
+    }
+
+    /// The first hint given, by its field name.
+    pub fn field(&self) -> Option<&'static str> {
+        if self.attention_pixel.is_some() {
+            Some("hints.attention_pixel")
+        } else if self.region.is_some() {
+            Some("hints.region")
+        } else if self.most_salient {
+            Some("hints.most_salient")
+        } else {
+            None
+        }
+    }
+
+    /// The segmentation's target hint; errors name the conflicting hint.
+    fn target(&self) -> Result<TargetHint, FieldError> {
+        match (self.attention_pixel, self.region) {
+            (Some(_), Some(_)) => Err(FieldError::new(
+                "hints.region",
+                "give either attention_pixel or region, not both",
+            )),
+            (Some((u, v)), None) => Ok(TargetHint::Pixel { u, v }),
+            (None, Some([u_min, v_min, u_max, v_max])) => {
+                if u_min >= u_max || v_min >= v_max {
+                    return Err(FieldError::new(
+                        "hints.region",
+                        format!(
+                            "is empty: u {u_min}..{u_max}, v {v_min}..{v_max} (need u_min < u_max and v_min < v_max)"
+                        ),
+                    ));
+                }
+                Ok(TargetHint::Region {
+                    u_min,
+                    v_min,
+                    u_max,
+                    v_max,
+                })
+            }
+            (None, None) => Ok(TargetHint::Auto),
+        }
+    }
+}
+
+/// What to return besides the plan (RGB-D input).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct OutputOptions {
+    /// Return the grasp-type model's six maps with the longer side at most this many pixels
+    /// (0 = do not).
+    pub probability_maps_max_side: u32,
+    /// Draw the overlay PNG (ROI, attention point, heat map of s*, contacts, opposition).
+    pub overlay: bool,
+}
+
+/// A decoded frame and the information extracted from it, kept until the plan is made.
+struct Perceived {
+    decoded: DecodedFrame,
+    info: GraspInformation,
+    /// The support plane came from the frame (the caller gave none).
+    plane_from_frame: bool,
+}
+
+impl Perceived {
+    /// Puts the perception report (and the overlay, if asked for) into the plan.
+    fn attach(self, plan: &mut GraspPlan, output: &OutputOptions) {
+        if let Some(e) = &self.info.model_error {
+            plan.warnings.push(format!(
+                "the grasp-type model failed ({e}); the geometric rule decided the type"
+            ));
+        }
+        if self.plane_from_frame && plan.plane_source == PlaneSource::Request {
+            plan.plane_source = PlaneSource::Detected;
+        }
+        let mut report = self.info.report(
+            self.decoded.width,
+            self.decoded.height,
+            output.probability_maps_max_side as usize,
+        );
+        if output.overlay {
+            report.overlay_png = Some(draw_overlay(&self.decoded, &self.info, plan));
+        }
+        plan.perception = Some(report);
     }
 }
 
@@ -90,6 +182,7 @@ pub struct PlanRequest {
     pub options: PlannerOptions,
     pub hints: PlanHints,
     pub image_hints: ImageHints,
+    pub output: OutputOptions,
 }
 
 /// Errors of the facade; each transport maps them to its status codes.
@@ -159,6 +252,8 @@ struct Inner {
     limits: Limits,
     /// Tactile sessions open now.
     tactile_sessions: Arc<AtomicUsize>,
+    /// The grasp-type network (method.md §4), when configured and loaded.
+    grasp_type_model: Option<Arc<GraspTypeModel>>,
 }
 
 /// The hands: descriptions by name, the kinematics of those that have them, and where
@@ -202,8 +297,23 @@ impl GraspService {
                 sensors: SensorCatalog::builtin(),
                 limits,
                 tactile_sessions: Arc::new(AtomicUsize::new(0)),
+                grasp_type_model: None,
             }),
         }
+    }
+
+    /// Sets the grasp-type network used for RGB-D input (at start, before the service is
+    /// cloned).
+    pub fn with_grasp_type_model(mut self, model: Arc<GraspTypeModel>) -> Self {
+        Arc::get_mut(&mut self.inner)
+            .expect("the model is set at start, before the service is shared")
+            .grasp_type_model = Some(model);
+        self
+    }
+
+    /// Whether a grasp-type network is loaded (else the geometric rule decides types).
+    pub fn has_grasp_type_model(&self) -> bool {
+        self.inner.grasp_type_model.is_some()
     }
 
     /// The built-in hands with the given limits.
@@ -388,8 +498,15 @@ impl GraspService {
     /// on a blocking thread. A planner panic becomes `Internal`, so one bad request cannot take
     /// the service down.
     pub fn plan(&self, request: PlanRequest) -> Result<GraspPlan, ServiceError> {
-        let input = self.prepare(request)?;
-        match catch_unwind(AssertUnwindSafe(|| graspd_core::plan(input))) {
+        let output = request.output;
+        let (input, perceived) = self.prepare_with_perception(request)?;
+        match catch_unwind(AssertUnwindSafe(|| {
+            let mut plan = graspd_core::plan(input)?;
+            if let Some(p) = perceived {
+                p.attach(&mut plan, &output);
+            }
+            Ok::<_, PlanError>(plan)
+        })) {
             Ok(result) => result.map_err(ServiceError::from),
             Err(panic) => {
                 let what = panic
@@ -406,20 +523,124 @@ impl GraspService {
 
     /// Checks a request against the catalog and the limits and turns it into planner input.
     pub fn prepare(&self, request: PlanRequest) -> Result<PlanInput, ServiceError> {
-        if request.image_hints.any() {
-            return Err(ServiceError::Unimplemented(
-                "image hints (attention_pixel, region, most_salient) are not implemented yet; give hints.attention_point in the cloud's frame".into(),
-            ));
-        }
-        let mut cloud = match request.source {
-            PlanSource::Cloud(cloud) => cloud,
-            PlanSource::Rgbd => {
-                return Err(ServiceError::Unimplemented(
-                    "RGB-D input is not implemented yet; send a point cloud".into(),
-                ));
+        self.prepare_with_perception(request)
+            .map(|(input, _)| input)
+    }
+
+    /// [`Self::prepare`], and for an RGB-D frame what perception found in it (Ω, method.md §4):
+    /// the planner then plans on the target object's points, with the frame's support plane,
+    /// the camera as viewpoint, and the model's type probabilities and attention point unless
+    /// the caller gave their own.
+    fn prepare_with_perception(
+        &self,
+        request: PlanRequest,
+    ) -> Result<(PlanInput, Option<Perceived>), ServiceError> {
+        let (hand, kinematics) = self.choose_hand(request.hand)?;
+        let mut hints = validate_hints(request.hints, &hand)?;
+        validate_options(&request.options)?;
+        let (mut cloud, perceived) = match request.source {
+            PlanSource::Cloud(cloud) => {
+                if let Some(field) = request.image_hints.field() {
+                    return Err(FieldError::new(
+                        field,
+                        "is an image hint: it needs rgbd input (for a cloud give hints.attention_point)",
+                    )
+                    .into());
+                }
+                (cloud, None)
+            }
+            PlanSource::Rgbd(frame) => {
+                let perceived = self.perceive(&frame, &request.image_hints, &hand, &hints)?;
+                let info = &perceived.info;
+                hints.support_plane = hints.support_plane.or(info.plane);
+                hints.viewpoint = hints.viewpoint.or(Some(info.viewpoint));
+                hints.attention_point = hints.attention_point.or(info.attention_point);
+                if hints.grasp_type.is_none() {
+                    hints.detected_types = info.detection.as_ref().map(|d| d.probabilities);
+                }
+                (info.object.clone(), Some(perceived))
             }
         };
-        let (hand, kinematics) = match request.hand {
+        // Only perception sets detected probabilities.
+        if perceived.is_none() {
+            hints.detected_types = None;
+        }
+        let max_points = self.inner.limits.max_points;
+        if cloud.len() > max_points {
+            return Err(ServiceError::TooLarge(FieldError::new(
+                if perceived.is_some() {
+                    "rgbd"
+                } else {
+                    "cloud.points"
+                },
+                format!(
+                    "{} points exceed the configured limit of {max_points} (max_points)",
+                    cloud.len()
+                ),
+            )));
+        }
+        cloud.validate("cloud", max_points)?;
+        Ok((
+            PlanInput {
+                cloud,
+                hand,
+                hints,
+                options: request.options,
+                kinematics,
+            },
+            perceived,
+        ))
+    }
+
+    /// Decodes a frame and extracts Ω from it.
+    fn perceive(
+        &self,
+        frame: &RgbdFrame,
+        image_hints: &ImageHints,
+        hand: &HandDescription,
+        hints: &PlanHints,
+    ) -> Result<Perceived, ServiceError> {
+        let limits = RgbdLimits {
+            max_pixels: self.inner.limits.max_image_pixels,
+        };
+        let pixels = frame.width.saturating_mul(frame.height);
+        if pixels > limits.max_pixels {
+            return Err(ServiceError::TooLarge(FieldError::new(
+                "rgbd",
+                format!(
+                    "{}×{} = {pixels} pixels exceed the configured limit of {} (max_image_pixels)",
+                    frame.width, frame.height, limits.max_pixels
+                ),
+            )));
+        }
+        let t = std::time::Instant::now();
+        let decoded = frame.decode("rgbd", &limits)?;
+        let decode_seconds = t.elapsed().as_secs_f64();
+        let target = image_hints.target()?;
+        let model = self.inner.grasp_type_model.as_deref();
+        let mut info = grasp_information(
+            &decoded,
+            target,
+            hints.support_plane,
+            model,
+            &hand.realisable_types(),
+            &InformationParams::default(),
+        )?;
+        info.timings.decode = decode_seconds;
+        info.timings.total += decode_seconds;
+        Ok(Perceived {
+            decoded,
+            info,
+            plane_from_frame: hints.support_plane.is_none(),
+        })
+    }
+
+    /// The hand of a request and its kinematics, when known.
+    fn choose_hand(
+        &self,
+        choice: HandChoice,
+    ) -> Result<(HandDescription, Option<Arc<KinematicModel>>), ServiceError> {
+        Ok(match choice {
             HandChoice::Name(name) => {
                 let hand = self.hand_by_name(&name)?;
                 let model = self.hands().models.get(&name).cloned();
@@ -430,26 +651,6 @@ impl GraspService {
                     .map_err(|e| rename_hand_field(e, "hand_description"))?;
                 (*hand, None)
             }
-        };
-        let max_points = self.inner.limits.max_points;
-        if cloud.len() > max_points {
-            return Err(ServiceError::TooLarge(FieldError::new(
-                "cloud.points",
-                format!(
-                    "{} points exceed the configured limit of {max_points} (max_points)",
-                    cloud.len()
-                ),
-            )));
-        }
-        cloud.validate("cloud", max_points)?;
-        let hints = validate_hints(request.hints, &hand)?;
-        validate_options(&request.options)?;
-        Ok(PlanInput {
-            cloud,
-            hand,
-            hints,
-            options: request.options,
-            kinematics,
         })
     }
 
@@ -836,6 +1037,7 @@ mod tests {
             options: PlannerOptions::default(),
             hints: PlanHints::default(),
             image_hints: ImageHints::default(),
+            output: OutputOptions::default(),
         }
     }
 
@@ -891,7 +1093,7 @@ mod tests {
     }
 
     #[test]
-    fn limits_and_unimplemented_inputs() {
+    fn limits_and_image_hints_on_clouds() {
         let s = GraspService::builtin(Limits {
             max_points: 50,
             ..Limits::default()
@@ -900,12 +1102,13 @@ mod tests {
             s.prepare(request("shadow")),
             Err(ServiceError::TooLarge(_))
         ));
-        let mut r = request("shadow");
-        r.source = PlanSource::Rgbd;
-        assert!(matches!(s.prepare(r), Err(ServiceError::Unimplemented(m)) if m.contains("RGB-D")));
+        let s = GraspService::builtin(Limits::default());
         let mut r = request("shadow");
         r.image_hints.most_salient = true;
-        assert!(matches!(s.prepare(r), Err(ServiceError::Unimplemented(_))));
+        assert_eq!(field_of(s.prepare(r)), "hints.most_salient");
+        let mut r = request("shadow");
+        r.image_hints.attention_pixel = Some((3, 4));
+        assert_eq!(field_of(s.prepare(r)), "hints.attention_pixel");
     }
 
     fn tactile_request(layout: LayoutChoice) -> TactileSessionRequest {

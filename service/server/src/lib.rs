@@ -12,5 +12,6 @@ pub mod server;
 pub mod telemetry;
 
 pub use facade::{
-    GraspService, HandChoice, ImageHints, Limits, PlanRequest, PlanSource, ServiceError,
+    GraspService, HandChoice, ImageHints, Limits, OutputOptions, PlanRequest, PlanSource,
+    ServiceError,
 };

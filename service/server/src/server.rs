@@ -5,9 +5,11 @@ use crate::config::Settings;
 use crate::facade::GraspService;
 use crate::runner::PlanRunner;
 use crate::{grpc, rest};
+use graspd_core::perception::{GraspTypeModel, init_onnx_runtime};
 use std::future::Future;
 use std::io::Write;
 use std::net::SocketAddr;
+use std::sync::Arc;
 use std::time::Duration;
 use thiserror::Error;
 use tokio::net::TcpListener;
@@ -32,6 +34,8 @@ pub enum ServeError {
     Rest(std::io::Error),
     #[error("cannot load the hands: {0}")]
     Hands(String),
+    #[error("cannot load the grasp-type model: {0}")]
+    Model(String),
     #[error("server task failed: {0}")]
     Task(#[from] tokio::task::JoinError),
 }
@@ -53,6 +57,22 @@ pub async fn run(
         GraspService::with_hands(settings.limits(), &settings.hand_setup())
     })
     .map_err(ServeError::Hands)?;
+    let service = match &settings.grasp_type_model {
+        None => service,
+        Some(path) => {
+            let model = tokio::task::block_in_place(|| {
+                init_onnx_runtime(settings.onnxruntime.as_deref())?;
+                GraspTypeModel::load(path, settings.model_threads)
+            })
+            .map_err(|e| ServeError::Model(e.to_string()))?;
+            tracing::info!(
+                path = %path.display(),
+                channels = model.channels(),
+                "grasp-type model loaded"
+            );
+            service.with_grasp_type_model(Arc::new(model))
+        }
+    };
     let grpc_listener = bind("gRPC", settings.grpc_addr).await?;
     let rest_listener = bind("REST", settings.rest_addr).await?;
     let grpc_addr = grpc_listener.local_addr().map_err(ServeError::Announce)?;

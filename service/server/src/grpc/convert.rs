@@ -4,14 +4,18 @@
 
 use crate::facade::RegisteredHand;
 use crate::facade::{
-    HandChoice, ImageHints, LayoutChoice, Limits, PlanRequest, PlanSource, ServiceError,
-    TactileFingerRequest, TactileSessionRequest,
+    HandChoice, ImageHints, LayoutChoice, Limits, OutputOptions, PlanRequest, PlanSource,
+    ServiceError, TactileFingerRequest, TactileSessionRequest,
 };
 use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
 use graspd_core::cloud::{
     Plane, PointCloud, decode_packed_vec3, decode_packed_xyz, encode_packed_xyz,
 };
 use graspd_core::hand::{Finger, GraspRealisation, HandGeometry, TypeEquivalence};
+use graspd_core::perception::{
+    CameraIntrinsics, ColorEncoding, DepthEncoding, ImageData, PerceptionReport, PerceptionTimings,
+    ProbabilityMaps, RgbdFrame, TargetChoice, declared_size, frame_size,
+};
 use graspd_core::planning::{
     CollisionReport, Contact, Opposition, PlaneSource, PlannerMode, Pose, Quality, StageStats,
     Timings, TypeSource,
@@ -29,7 +33,7 @@ use graspd_proto::v1::plan_grasp_request::{Hand, Input};
 use graspd_proto::v1::stabilize_request::Kind;
 use graspd_proto::v1::tactile_detector::Kind as DetectorKind;
 use graspd_proto::v1::tactile_finger::Layout as FingerLayout;
-use nalgebra::{Point3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
 
 // ---------------------------------------------------------------------------------------------
 // Value types
@@ -477,16 +481,121 @@ fn hints_from_proto(h: Option<pb::PlanHints>) -> Result<(PlanHints, ImageHints),
             .transpose()?,
         viewpoint: h.viewpoint.as_ref().map(point_from_proto),
         up: h.up.as_ref().map(vec3_from_proto),
+        detected_types: None,
     };
     let image = ImageHints {
-        attention_pixel: h.attention_pixel.is_some(),
-        region: h.region.is_some(),
+        attention_pixel: h.attention_pixel.map(|p| (p.u, p.v)),
+        region: h.region.map(|r| [r.u_min, r.v_min, r.u_max, r.v_max]),
         most_salient: h.most_salient,
     };
     Ok((hints, image))
 }
 
-fn hints_to_proto(h: &PlanHints) -> pb::PlanHints {
+/// A caller's camera pose: the quaternion is normalised; a zero or non-finite one is refused.
+fn camera_pose_from_proto(p: &pb::Pose, field: &str) -> Result<Isometry3<f64>, FieldError> {
+    let position = point_from_proto(required(&p.position, &format!("{field}.position"))?);
+    let q = required(&p.orientation, &format!("{field}.orientation"))?;
+    let q = Quaternion::new(q.w, q.x, q.y, q.z);
+    let norm = q.norm();
+    if !norm.is_finite() || norm < 1e-9 {
+        return Err(FieldError::new(
+            format!("{field}.orientation"),
+            "must be a finite, non-zero quaternion",
+        ));
+    }
+    Ok(Isometry3::from_parts(
+        position.coords.into(),
+        UnitQuaternion::from_quaternion(q),
+    ))
+}
+
+/// The RGB-D frame as received; sizes and encodings are checked here, pixels by the facade.
+fn rgbd_from_proto(f: pb::RgbdFrame) -> Result<RgbdFrame, FieldError> {
+    let color = f.color.unwrap_or_default();
+    let depth = f.depth.unwrap_or_default();
+    let color_encoding = ColorEncoding::parse(&color.encoding, "rgbd.color.encoding")?;
+    let depth_encoding = DepthEncoding::parse(&depth.encoding, "rgbd.depth.encoding")?;
+    let color_size = declared_size(
+        color.width,
+        color.height,
+        &color.data,
+        color_encoding.bytes_per_pixel().is_none(),
+        "rgbd.color",
+    )?;
+    let depth_size = declared_size(
+        depth.width,
+        depth.height,
+        &depth.data,
+        depth_encoding.bytes_per_pixel().is_none(),
+        "rgbd.depth",
+    )?;
+    let (width, height) = frame_size(color_size, depth_size, "rgbd")?;
+    let k = f.intrinsics.unwrap_or_default();
+    Ok(RgbdFrame {
+        color: ImageData {
+            encoding: color_encoding,
+            data: color.data,
+            step: color.step as usize,
+        },
+        depth: ImageData {
+            encoding: depth_encoding,
+            data: depth.data,
+            step: depth.step as usize,
+        },
+        width,
+        height,
+        intrinsics: CameraIntrinsics {
+            fx: k.fx,
+            fy: k.fy,
+            cx: k.cx,
+            cy: k.cy,
+        },
+        depth_scale: (f.depth_scale != 0.0).then_some(f.depth_scale),
+        camera_to_world: f
+            .camera_to_world
+            .as_ref()
+            .map(|p| camera_pose_from_proto(p, "rgbd.camera_to_world"))
+            .transpose()?,
+    })
+}
+
+/// Encodes a frame for the wire (clients).
+fn rgbd_to_proto(f: &RgbdFrame) -> pb::RgbdFrame {
+    let image = |encoding: String, data: &[u8], step: usize| pb::Image {
+        width: f.width as u32,
+        height: f.height as u32,
+        encoding,
+        step: step as u32,
+        data: data.to_vec(),
+    };
+    pb::RgbdFrame {
+        color: Some(image(
+            f.color.encoding.to_string(),
+            &f.color.data,
+            f.color.step,
+        )),
+        depth: Some(image(
+            f.depth.encoding.to_string(),
+            &f.depth.data,
+            f.depth.step,
+        )),
+        intrinsics: Some(pb::CameraIntrinsics {
+            fx: f.intrinsics.fx,
+            fy: f.intrinsics.fy,
+            cx: f.intrinsics.cx,
+            cy: f.intrinsics.cy,
+        }),
+        depth_scale: f.depth_scale.unwrap_or(0.0),
+        camera_to_world: f.camera_to_world.as_ref().map(|t| {
+            pose_to_proto(&Pose {
+                position: Point3::from(t.translation.vector),
+                orientation: t.rotation,
+            })
+        }),
+    }
+}
+
+fn hints_to_proto(h: &PlanHints, image: &ImageHints) -> pb::PlanHints {
     pb::PlanHints {
         grasp_type: h
             .grasp_type
@@ -495,7 +604,16 @@ fn hints_to_proto(h: &PlanHints) -> pb::PlanHints {
         support_plane: h.support_plane.as_ref().map(plane_to_proto),
         viewpoint: h.viewpoint.as_ref().map(point_to_proto),
         up: h.up.as_ref().map(vec3_to_proto),
-        ..Default::default()
+        attention_pixel: image.attention_pixel.map(|(u, v)| pb::Pixel { u, v }),
+        region: image
+            .region
+            .map(|[u_min, v_min, u_max, v_max]| pb::RegionBox {
+                u_min,
+                v_min,
+                u_max,
+                v_max,
+            }),
+        most_salient: image.most_salient,
     }
 }
 
@@ -527,7 +645,7 @@ pub fn plan_request_from_proto(
 ) -> Result<PlanRequest, ServiceError> {
     let source = match r.input {
         Some(Input::Cloud(c)) => PlanSource::Cloud(cloud_from_proto(c, limits)?),
-        Some(Input::Rgbd(_)) => PlanSource::Rgbd,
+        Some(Input::Rgbd(f)) => PlanSource::Rgbd(Box::new(rgbd_from_proto(f)?)),
         None => {
             return Err(FieldError::new("cloud", "give the input: a cloud (or rgbd)").into());
         }
@@ -543,16 +661,21 @@ pub fn plan_request_from_proto(
     };
     let options = options_from_proto(r.options)?;
     let (hints, image_hints) = hints_from_proto(r.hints)?;
+    let o = r.output.unwrap_or_default();
     Ok(PlanRequest {
         source,
         hand,
         options,
         hints,
         image_hints,
+        output: OutputOptions {
+            probability_maps_max_side: o.probability_maps_max_side,
+            overlay: o.overlay,
+        },
     })
 }
 
-/// Encodes a request for the wire (clients). RGB-D input encodes as an empty frame.
+/// Encodes a request for the wire (clients).
 pub fn plan_request_to_proto(r: &PlanRequest) -> pb::PlanGraspRequest {
     let input = match &r.source {
         PlanSource::Cloud(c) => Input::Cloud(pb::PointCloud {
@@ -567,7 +690,7 @@ pub fn plan_request_to_proto(r: &PlanRequest) -> pb::PlanGraspRequest {
                 .unwrap_or_default(),
             frame_id: String::new(),
         }),
-        PlanSource::Rgbd => Input::Rgbd(pb::RgbdFrame::default()),
+        PlanSource::Rgbd(f) => Input::Rgbd(rgbd_to_proto(f)),
     };
     let hand = match &r.hand {
         HandChoice::Name(n) => Hand::HandName(n.clone()),
@@ -577,7 +700,11 @@ pub fn plan_request_to_proto(r: &PlanRequest) -> pb::PlanGraspRequest {
         input: Some(input),
         hand: Some(hand),
         options: Some(options_to_proto(&r.options)),
-        hints: Some(hints_to_proto(&r.hints)),
+        hints: Some(hints_to_proto(&r.hints, &r.image_hints)),
+        output: Some(pb::OutputOptions {
+            probability_maps_max_side: r.output.probability_maps_max_side,
+            overlay: r.output.overlay,
+        }),
     }
 }
 
@@ -626,7 +753,14 @@ pub fn plan_to_proto(p: &GraspPlan) -> pb::PlanGraspResponse {
         attention: Some(pb::AttentionPoint {
             position: Some(point_to_proto(&p.attention_point)),
             normal: Some(vec3_to_proto(&p.attention_normal)),
-            pixel: None,
+            pixel: p
+                .perception
+                .as_ref()
+                .and_then(|r| r.attention_pixel)
+                .map(|[u, v]| pb::Pixel {
+                    u: u.round().max(0.0) as u32,
+                    v: v.round().max(0.0) as u32,
+                }),
         }),
         opposition: Some(pb::Opposition {
             h1: hand_part_to_proto(p.opposition.h1) as i32,
@@ -693,6 +827,12 @@ pub fn plan_to_proto(p: &GraspPlan) -> pb::PlanGraspResponse {
         mode: mode_to_proto(p.mode) as i32,
         seed: p.seed,
         warnings: p.warnings.clone(),
+        perception: p.perception.as_ref().map(perception_to_proto),
+        overlay_png: p
+            .perception
+            .as_ref()
+            .and_then(|r| r.overlay_png.clone())
+            .unwrap_or_default(),
     }
 }
 
@@ -704,6 +844,7 @@ fn pair<T: Copy>(v: Vec<T>, field: &str) -> Result<[T; 2], FieldError> {
 /// Decodes a plan as the server sent it (clients).
 pub fn plan_from_proto(p: pb::PlanGraspResponse) -> Result<GraspPlan, FieldError> {
     let attention = required(&p.attention, "attention")?;
+    let attention_pixel = attention.pixel.map(|px| [px.u as f64, px.v as f64]);
     let opp = required(&p.opposition, "opposition")?;
     let q = p.quality.unwrap_or_default();
     let t = p.timings.unwrap_or_default();
@@ -795,6 +936,103 @@ pub fn plan_from_proto(p: pb::PlanGraspResponse) -> Result<GraspPlan, FieldError
         mode: mode_from_proto(p.mode, "mode")?,
         seed: p.seed,
         warnings: p.warnings,
+        perception: p
+            .perception
+            .map(|r| perception_from_proto(r, p.overlay_png, attention_pixel))
+            .transpose()?,
+    })
+}
+
+fn perception_to_proto(r: &PerceptionReport) -> pb::Perception {
+    let t = &r.timings;
+    let [u_min, v_min, u_max, v_max] = r.roi;
+    pb::Perception {
+        width: r.width as u32,
+        height: r.height as u32,
+        roi: Some(pb::RegionBox {
+            u_min,
+            v_min,
+            u_max,
+            v_max,
+        }),
+        roi_pixels: r.roi_pixels as u64,
+        target_source: r.target_source.name().into(),
+        objects: r.objects as u32,
+        object_points: r.object_points as u64,
+        timings: Some(pb::PerceptionTimings {
+            decode: t.decode,
+            saliency: t.saliency,
+            segmentation: t.segmentation,
+            roi: t.roi,
+            grasp_type: t.grasp_type,
+            total: t.total,
+        }),
+        probability_maps: r.probability_maps.as_ref().map(|m| pb::ProbabilityMaps {
+            width: m.width as u32,
+            height: m.height as u32,
+            values: m.values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+        }),
+    }
+}
+
+fn perception_from_proto(
+    r: pb::Perception,
+    overlay_png: Vec<u8>,
+    attention_pixel: Option<[f64; 2]>,
+) -> Result<PerceptionReport, FieldError> {
+    let roi = r.roi.unwrap_or_default();
+    let t = r.timings.unwrap_or_default();
+    let maps = match r.probability_maps {
+        None => None,
+        Some(m) => {
+            let n = 6 * m.width as usize * m.height as usize;
+            if m.values.len() != 4 * n {
+                return Err(FieldError::new(
+                    "perception.probability_maps.values",
+                    format!(
+                        "{} bytes, expected {} for 6 × {}×{} float32",
+                        m.values.len(),
+                        4 * n,
+                        m.width,
+                        m.height
+                    ),
+                ));
+            }
+            Some(ProbabilityMaps {
+                width: m.width as usize,
+                height: m.height as usize,
+                values: m
+                    .values
+                    .chunks_exact(4)
+                    .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                    .collect(),
+            })
+        }
+    };
+    Ok(PerceptionReport {
+        width: r.width as usize,
+        height: r.height as usize,
+        roi: [roi.u_min, roi.v_min, roi.u_max, roi.v_max],
+        roi_pixels: r.roi_pixels as usize,
+        target_source: TargetChoice::from_name(&r.target_source).ok_or_else(|| {
+            FieldError::new(
+                "perception.target_source",
+                format!("unknown source '{}'", r.target_source),
+            )
+        })?,
+        objects: r.objects as usize,
+        object_points: r.object_points as usize,
+        attention_pixel,
+        timings: PerceptionTimings {
+            decode: t.decode,
+            saliency: t.saliency,
+            segmentation: t.segmentation,
+            roi: t.roi,
+            grasp_type: t.grasp_type,
+            total: t.total,
+        },
+        probability_maps: maps,
+        overlay_png: (!overlay_png.is_empty()).then_some(overlay_png),
     })
 }
 

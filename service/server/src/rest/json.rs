@@ -6,12 +6,16 @@
 
 use crate::facade::RegisteredHand;
 use crate::facade::{
-    HandChoice, ImageHints, LayoutChoice, Limits, PlanRequest, PlanSource, ServiceError,
-    TactileFingerRequest, TactileSessionRequest,
+    HandChoice, ImageHints, LayoutChoice, Limits, OutputOptions, PlanRequest, PlanSource,
+    ServiceError, TactileFingerRequest, TactileSessionRequest,
 };
 use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
 use base64::Engine;
 use graspd_core::cloud::{Plane, PointCloud, decode_packed_vec3};
+use graspd_core::perception::{
+    CameraIntrinsics, ColorEncoding, DepthEncoding, ImageData, PerceptionReport, PerceptionTimings,
+    RgbdFrame, TargetChoice, declared_size, frame_size,
+};
 use graspd_core::planning::{
     CollisionReport, PlaneSource, PlannerMode, Pose, Quality, StageStats, Timings, TypeSource,
 };
@@ -22,7 +26,7 @@ use graspd_core::tactile::{
 use graspd_core::{
     FieldError, GraspPlan, GraspType, HandDescription, HandPart, PlanHints, PlannerOptions,
 };
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
 use serde::de::{self, DeserializeOwned, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
 use std::fmt;
@@ -263,11 +267,11 @@ pub struct HintsJson {
     pub viewpoint: Option<Vec3Json>,
     #[serde(default)]
     pub up: Option<Vec3Json>,
-    /// Image hints: not implemented yet (answer 501).
+    /// Image hints (RGB-D input only).
     #[serde(default)]
-    pub attention_pixel: Option<IgnoredAny>,
+    pub attention_pixel: Option<PixelJson>,
     #[serde(default)]
-    pub region: Option<IgnoredAny>,
+    pub region: Option<RegionJson>,
     #[serde(default)]
     pub most_salient: bool,
 }
@@ -279,9 +283,9 @@ pub struct HintsJson {
 pub struct PlanRequestJson {
     #[serde(default)]
     pub cloud: Option<CloudJson>,
-    /// RGB-D input: not implemented yet (answers 501).
+    /// RGB-D input (images as base64, or as the multipart parts `color` and `depth`).
     #[serde(default)]
-    pub rgbd: Option<IgnoredAny>,
+    pub rgbd: Option<RgbdJson>,
     #[serde(default)]
     pub hand_name: Option<String>,
     #[serde(default)]
@@ -290,6 +294,184 @@ pub struct PlanRequestJson {
     pub options: Option<PlannerOptions>,
     #[serde(default)]
     pub hints: Option<HintsJson>,
+    #[serde(default)]
+    pub output: Option<OutputJson>,
+}
+
+/// A box in image pixels, [u_min, u_max) × [v_min, v_max).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegionJson {
+    pub u_min: u32,
+    pub v_min: u32,
+    pub u_max: u32,
+    pub v_max: u32,
+}
+
+/// What to return besides the plan.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputJson {
+    #[serde(default)]
+    pub probability_maps_max_side: u32,
+    #[serde(default)]
+    pub overlay: bool,
+}
+
+/// One image of an RGB-D frame: `data` base64 (absent when a multipart part carries it).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ImageJson {
+    #[serde(default)]
+    pub width: u32,
+    #[serde(default)]
+    pub height: u32,
+    /// rgb8, bgr8, png, jpeg (colour); 16UC1, 32FC1, png (depth). May be left out for a
+    /// multipart PNG / JPEG part.
+    #[serde(default)]
+    pub encoding: String,
+    #[serde(default)]
+    pub step: u32,
+    #[serde(default)]
+    pub data: Option<String>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IntrinsicsJson {
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+}
+
+/// The RgbdFrame in JSON.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RgbdJson {
+    #[serde(default)]
+    pub color: ImageJson,
+    #[serde(default)]
+    pub depth: ImageJson,
+    pub intrinsics: Option<IntrinsicsJson>,
+    #[serde(default)]
+    pub depth_scale: Option<f64>,
+    #[serde(default)]
+    pub camera_to_world: Option<PoseJson>,
+}
+
+/// Bytes of a multipart image part, which stand in for the JSON's base64 `data`.
+#[derive(Debug, Clone, Default)]
+pub struct ImageParts {
+    pub color: Option<Vec<u8>>,
+    pub depth: Option<Vec<u8>>,
+}
+
+/// The encoding of a file part left without one: PNG or JPEG by its magic bytes.
+fn sniff_encoding(data: &[u8]) -> &'static str {
+    if data.starts_with(&[0x89, b'P', b'N', b'G']) {
+        "png"
+    } else if data.starts_with(&[0xFF, 0xD8]) {
+        "jpeg"
+    } else {
+        ""
+    }
+}
+
+fn image_bytes(
+    img: &mut ImageJson,
+    part: Option<Vec<u8>>,
+    field: &str,
+) -> Result<Vec<u8>, FieldError> {
+    match (img.data.take(), part) {
+        (Some(_), Some(_)) => Err(FieldError::new(
+            format!("{field}.data"),
+            "give the image either as base64 data or as a multipart part, not both",
+        )),
+        (Some(b64), None) => base64::engine::general_purpose::STANDARD
+            .decode(b64.as_bytes())
+            .map_err(|e| FieldError::new(format!("{field}.data"), format!("not base64: {e}"))),
+        (None, Some(bytes)) => {
+            if img.encoding.is_empty() {
+                img.encoding = sniff_encoding(&bytes).into();
+            }
+            Ok(bytes)
+        }
+        (None, None) => Err(FieldError::new(
+            format!("{field}.data"),
+            "is required (base64, or a multipart part)",
+        )),
+    }
+}
+
+/// The frame as received; sizes and encodings are checked here, pixels by the facade.
+fn rgbd_from_json(mut f: RgbdJson, parts: ImageParts) -> Result<RgbdFrame, FieldError> {
+    let color_data = image_bytes(&mut f.color, parts.color, "rgbd.color")?;
+    let depth_data = image_bytes(&mut f.depth, parts.depth, "rgbd.depth")?;
+    let color_encoding = ColorEncoding::parse(&f.color.encoding, "rgbd.color.encoding")?;
+    let depth_encoding = DepthEncoding::parse(&f.depth.encoding, "rgbd.depth.encoding")?;
+    let color_size = declared_size(
+        f.color.width,
+        f.color.height,
+        &color_data,
+        color_encoding.bytes_per_pixel().is_none(),
+        "rgbd.color",
+    )?;
+    let depth_size = declared_size(
+        f.depth.width,
+        f.depth.height,
+        &depth_data,
+        depth_encoding.bytes_per_pixel().is_none(),
+        "rgbd.depth",
+    )?;
+    let (width, height) = frame_size(color_size, depth_size, "rgbd")?;
+    let k = f
+        .intrinsics
+        .ok_or_else(|| FieldError::new("rgbd.intrinsics", "is required (fx, fy, cx, cy)"))?;
+    let camera_to_world = match f.camera_to_world {
+        None => None,
+        Some(p) => {
+            let q = Quaternion::new(
+                p.orientation.w,
+                p.orientation.x,
+                p.orientation.y,
+                p.orientation.z,
+            );
+            let norm = q.norm();
+            if !norm.is_finite() || norm < 1e-9 {
+                return Err(FieldError::new(
+                    "rgbd.camera_to_world.orientation",
+                    "must be a finite, non-zero quaternion",
+                ));
+            }
+            Some(Isometry3::from_parts(
+                p.position.vector().into(),
+                UnitQuaternion::from_quaternion(q),
+            ))
+        }
+    };
+    Ok(RgbdFrame {
+        color: ImageData {
+            encoding: color_encoding,
+            data: color_data,
+            step: f.color.step as usize,
+        },
+        depth: ImageData {
+            encoding: depth_encoding,
+            data: depth_data,
+            step: f.depth.step as usize,
+        },
+        width,
+        height,
+        intrinsics: CameraIntrinsics {
+            fx: k.fx,
+            fy: k.fy,
+            cx: k.cx,
+            cy: k.cy,
+        },
+        depth_scale: f.depth_scale.filter(|s| *s != 0.0),
+        camera_to_world,
+    })
 }
 
 fn points_from_json(
@@ -336,8 +518,16 @@ fn cloud_from_json(c: CloudJson, limits: &Limits) -> Result<PointCloud, ServiceE
 pub fn plan_request_from_json(
     r: PlanRequestJson,
     file_cloud: Option<PointCloud>,
+    image_parts: ImageParts,
     limits: &Limits,
 ) -> Result<PlanRequest, ServiceError> {
+    if (image_parts.color.is_some() || image_parts.depth.is_some()) && r.rgbd.is_none() {
+        return Err(FieldError::new(
+            "rgbd",
+            "the multipart upload has colour or depth parts but the request has no rgbd (give at least rgbd.intrinsics)",
+        )
+        .into());
+    }
     let source = match (r.cloud, r.rgbd, file_cloud) {
         (Some(_), _, Some(_)) => {
             return Err(FieldError::new(
@@ -349,7 +539,12 @@ pub fn plan_request_from_json(
         (Some(_), Some(_), None) => {
             return Err(FieldError::new("rgbd", "give either cloud or rgbd, not both").into());
         }
-        (None, Some(_), _) => PlanSource::Rgbd,
+        (None, Some(_), Some(_)) => {
+            return Err(
+                FieldError::new("rgbd", "give either a cloud file or rgbd, not both").into(),
+            );
+        }
+        (None, Some(f), None) => PlanSource::Rgbd(Box::new(rgbd_from_json(f, image_parts)?)),
         (Some(c), None, None) => PlanSource::Cloud(cloud_from_json(c, limits)?),
         (None, None, Some(c)) => PlanSource::Cloud(c),
         (None, None, None) => {
@@ -384,25 +579,32 @@ pub fn plan_request_from_json(
         }),
         viewpoint: h.viewpoint.map(|p| p.point()),
         up: h.up.map(|p| p.vector()),
+        detected_types: None,
     };
     let image_hints = ImageHints {
-        attention_pixel: h.attention_pixel.is_some(),
-        region: h.region.is_some(),
+        attention_pixel: h.attention_pixel.map(|p| (p.u, p.v)),
+        region: h.region.map(|r| [r.u_min, r.v_min, r.u_max, r.v_max]),
         most_salient: h.most_salient,
     };
+    let o = r.output.unwrap_or_default();
     Ok(PlanRequest {
         source,
         hand,
         options: r.options.unwrap_or_default(),
         hints,
         image_hints,
+        output: OutputOptions {
+            probability_maps_max_side: o.probability_maps_max_side,
+            overlay: o.overlay,
+        },
     })
 }
 
 // ---------------------------------------------------------------------------------------------
 // Response
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PixelJson {
     pub u: u32,
     pub v: u32,
@@ -470,6 +672,64 @@ pub struct PlanResponseJson {
     pub mode: PlannerMode,
     pub seed: u64,
     pub warnings: Vec<String>,
+    /// Set for RGB-D input.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub perception: Option<PerceptionJson>,
+}
+
+/// The grasp-type model's maps: `values` is base64 of 6 × height × width little-endian float32
+/// (type-major in the order s = 1..6, row-major), as in the proto.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ProbabilityMapsJson {
+    pub width: usize,
+    pub height: usize,
+    pub values: String,
+}
+
+/// The Perception message in JSON.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PerceptionJson {
+    pub width: usize,
+    pub height: usize,
+    pub roi: RegionJson,
+    pub roi_pixels: usize,
+    pub target_source: TargetChoice,
+    pub objects: usize,
+    pub object_points: usize,
+    pub timings: PerceptionTimings,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub probability_maps: Option<ProbabilityMapsJson>,
+}
+
+impl From<&PerceptionReport> for PerceptionJson {
+    fn from(r: &PerceptionReport) -> Self {
+        let [u_min, v_min, u_max, v_max] = r.roi;
+        Self {
+            width: r.width,
+            height: r.height,
+            roi: RegionJson {
+                u_min,
+                v_min,
+                u_max,
+                v_max,
+            },
+            roi_pixels: r.roi_pixels,
+            target_source: r.target_source,
+            objects: r.objects,
+            object_points: r.object_points,
+            timings: r.timings,
+            probability_maps: r.probability_maps.as_ref().map(|m| ProbabilityMapsJson {
+                width: m.width,
+                height: m.height,
+                values: base64::engine::general_purpose::STANDARD.encode(
+                    m.values
+                        .iter()
+                        .flat_map(|v| v.to_le_bytes())
+                        .collect::<Vec<u8>>(),
+                ),
+            }),
+        }
+    }
 }
 
 impl From<&GraspPlan> for PlanResponseJson {
@@ -484,7 +744,14 @@ impl From<&GraspPlan> for PlanResponseJson {
             attention: AttentionJson {
                 position: (&p.attention_point).into(),
                 normal: (&p.attention_normal).into(),
-                pixel: None,
+                pixel: p
+                    .perception
+                    .as_ref()
+                    .and_then(|r| r.attention_pixel)
+                    .map(|[u, v]| PixelJson {
+                        u: u.round().max(0.0) as u32,
+                        v: v.round().max(0.0) as u32,
+                    }),
             },
             opposition: OppositionJson {
                 h1: o.h1,
@@ -527,6 +794,7 @@ impl From<&GraspPlan> for PlanResponseJson {
             mode: p.mode,
             seed: p.seed,
             warnings: p.warnings.clone(),
+            perception: p.perception.as_ref().map(PerceptionJson::from),
         }
     }
 }
@@ -892,7 +1160,7 @@ mod tests {
             "body",
         )
         .unwrap();
-        let req = plan_request_from_json(r, None, &limits()).unwrap();
+        let req = plan_request_from_json(r, None, Default::default(), &limits()).unwrap();
         let PlanSource::Cloud(c) = &req.source else {
             panic!()
         };
@@ -903,7 +1171,7 @@ mod tests {
         let b64 = base64::engine::general_purpose::STANDARD.encode(&packed[..11]);
         let body = format!(r#"{{"cloud":{{"points":"{b64}"}},"hand_name":"shadow"}}"#);
         let r: PlanRequestJson = parse(body.as_bytes(), "body").unwrap();
-        let e = plan_request_from_json(r, None, &limits()).unwrap_err();
+        let e = plan_request_from_json(r, None, Default::default(), &limits()).unwrap_err();
         assert_eq!(e.field(), Some("cloud.points"));
         assert!(e.to_string().contains("byte length 11"));
     }

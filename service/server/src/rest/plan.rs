@@ -1,23 +1,52 @@
-//! `POST /v1/plan`: a JSON body, or a multipart upload with a `cloud` file part (PCD or PLY) and
-//! an optional `request` part holding the same JSON without `cloud`.
+//! `POST /v1/plan`: a JSON body, or a multipart upload with a `cloud` file part (PCD or PLY), or
+//! `color` and `depth` file parts (PNG / JPEG colour, 16-bit PNG depth) of an RGB-D frame, and a
+//! `request` part holding the same JSON without the file's data.
+//!
+//! `?format=png` answers with the overlay image (`image/png`) instead of the JSON plan (RGB-D
+//! input only); `?format=json` is the default.
 
 use super::error::ApiError;
 use super::json::{self, PlanRequestJson, PlanResponseJson};
-use crate::facade::{Limits, PlanRequest};
+use crate::facade::{Limits, PlanRequest, PlanSource};
 use crate::runner::PlanRunner;
 use axum::Json;
 use axum::body::Bytes;
-use axum::extract::{FromRequest, Multipart, Request, State};
+use axum::extract::{FromRequest, Multipart, Query, Request, State};
 use axum::http::StatusCode;
 use axum::http::header::CONTENT_TYPE;
+use axum::response::{IntoResponse, Response};
 use graspd_core::FieldError;
 use graspd_core::cloud::PointCloud;
 use graspd_core::cloud::io::read_cloud_file;
+use serde::Deserialize;
+
+/// The query of `POST /v1/plan`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanQuery {
+    /// `json` (default) or `png` (the overlay).
+    #[serde(default)]
+    format: Option<String>,
+}
 
 pub async fn plan(
     State(runner): State<PlanRunner>,
+    query: Result<Query<PlanQuery>, axum::extract::rejection::QueryRejection>,
     request: Request,
-) -> Result<Json<PlanResponseJson>, ApiError> {
+) -> Result<Response, ApiError> {
+    let query = query
+        .map_err(|e| ApiError::invalid(FieldError::new("query", e.body_text())))?
+        .0;
+    let png = match query.format.as_deref() {
+        None | Some("json") => false,
+        Some("png") => true,
+        Some(other) => {
+            return Err(ApiError::invalid(FieldError::new(
+                "format",
+                format!("unknown format '{}' (json or png)", other.escape_debug()),
+            )));
+        }
+    };
     let limits = *runner.service().limits();
     let content_type = request
         .headers()
@@ -35,7 +64,7 @@ pub async fn plan(
             .await
             .map_err(|e| body_error(e.status(), e.body_text(), &limits))?;
         let body: PlanRequestJson = json::parse(&bytes, "body")?;
-        json::plan_request_from_json(body, None, &limits)?
+        json::plan_request_from_json(body, None, Default::default(), &limits)?
     } else {
         return Err(ApiError::new(
             StatusCode::UNSUPPORTED_MEDIA_TYPE,
@@ -45,8 +74,25 @@ pub async fn plan(
             ),
         ));
     };
+    let mut plan_request = plan_request;
+    if png {
+        if !matches!(plan_request.source, PlanSource::Rgbd(_)) {
+            return Err(ApiError::invalid(FieldError::new(
+                "format",
+                "format=png draws on the colour image: it needs rgbd input",
+            )));
+        }
+        plan_request.output.overlay = true;
+    }
     let plan = runner.plan(plan_request, "rest").await?;
-    Ok(Json(PlanResponseJson::from(&plan)))
+    if png {
+        let bytes = plan
+            .perception
+            .and_then(|p| p.overlay_png)
+            .unwrap_or_default();
+        return Ok(([(CONTENT_TYPE, "image/png")], bytes).into_response());
+    }
+    Ok(Json(PlanResponseJson::from(&plan)).into_response())
 }
 
 /// A body that could not be read: over the limit (413) or broken (400).
@@ -70,6 +116,7 @@ async fn from_multipart(
 ) -> Result<PlanRequest, ApiError> {
     let mut cloud: Option<PointCloud> = None;
     let mut request: Option<PlanRequestJson> = None;
+    let mut images = json::ImageParts::default();
     while let Some(field) = multipart
         .next_field()
         .await
@@ -91,7 +138,9 @@ async fn from_multipart(
                 cloud = Some(read_cloud_file(&bytes)?);
             }
             "request" if request.is_none() => request = Some(json::parse(&bytes, "request")?),
-            "cloud" | "request" => {
+            "color" if images.color.is_none() => images.color = Some(bytes.to_vec()),
+            "depth" if images.depth.is_none() => images.depth = Some(bytes.to_vec()),
+            "cloud" | "request" | "color" | "depth" => {
                 return Err(ApiError::invalid(FieldError::new(
                     name.clone(),
                     format!("the part '{name}' is given twice"),
@@ -101,22 +150,23 @@ async fn from_multipart(
                 return Err(ApiError::invalid(FieldError::new(
                     "multipart",
                     format!(
-                        "unknown part '{}' (expected a file part 'cloud' and an optional JSON part 'request')",
+                        "unknown part '{}' (expected a file part 'cloud', or 'color' and 'depth', and a JSON part 'request')",
                         other.escape_debug()
                     ),
                 )));
             }
         }
     }
-    let Some(cloud) = cloud else {
+    if cloud.is_none() && images.color.is_none() && images.depth.is_none() {
         return Err(ApiError::invalid(FieldError::new(
             "cloud",
-            "the multipart upload has no file part named 'cloud'",
+            "the multipart upload has no file part named 'cloud' (nor 'color' and 'depth')",
         )));
-    };
+    }
     Ok(json::plan_request_from_json(
         request.unwrap_or_default(),
-        Some(cloud),
+        cloud,
+        images,
         limits,
     )?)
 }
