@@ -14,7 +14,7 @@ use std::io::{BufRead, BufReader};
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::{Child, Command, ExitStatus, Stdio};
-use std::sync::mpsc;
+use std::sync::{Arc, Mutex, mpsc};
 use std::time::Duration;
 use tonic::transport::Channel;
 
@@ -50,6 +50,8 @@ pub struct Server {
     child: Child,
     pub grpc_addr: SocketAddr,
     pub rest_addr: SocketAddr,
+    /// Its log lines (stderr), when started with [`Server::start_with_logs`].
+    logs: Option<Arc<Mutex<Vec<String>>>>,
 }
 
 impl Server {
@@ -63,8 +65,18 @@ impl Server {
         Self::start_binary(&binary("graspd", "GRASPD_BIN"), args)
     }
 
+    /// Starts graspd with extra flags and keeps its log lines (stderr) for [`Server::logs`]; they
+    /// are echoed to the test's stderr too. Pass `--log` to choose what is logged.
+    pub fn start_with_logs(args: &[&str]) -> Self {
+        Self::start_inner(&binary("graspd", "GRASPD_BIN"), args, true)
+    }
+
     /// Starts the graspd binary at `path` (e.g. a release build for a benchmark) with extra flags.
     pub fn start_binary(path: &std::path::Path, args: &[&str]) -> Self {
+        Self::start_inner(path, args, false)
+    }
+
+    fn start_inner(path: &std::path::Path, args: &[&str], keep_logs: bool) -> Self {
         let mut command = Command::new(path);
         for var in [
             "GRASPD_CONFIG",
@@ -73,7 +85,10 @@ impl Server {
             "GRASPD_MAX_MESSAGE_BYTES",
             "GRASPD_MAX_POINTS",
             "GRASPD_MAX_CONCURRENT_PLANS",
+            "GRASPD_MAX_QUEUED_PLANS",
             "GRASPD_MAX_TACTILE_SESSIONS",
+            "GRASPD_AUTH_TOKENS",
+            "GRASPD_AUTH_TOKENS_FILE",
             "GRASPD_LOG_FORMAT",
             "GRASPD_HANDS_DIR",
             "GRASPD_IMPORT_HANDS",
@@ -88,9 +103,25 @@ impl Server {
             .args(args)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
+            .stderr(if keep_logs {
+                Stdio::piped()
+            } else {
+                Stdio::inherit()
+            })
             .spawn()
             .expect("cannot start graspd");
+        let logs = child.stderr.take().map(|stderr| {
+            let logs = Arc::new(Mutex::new(Vec::new()));
+            let sink = logs.clone();
+            std::thread::spawn(move || {
+                for line in BufReader::new(stderr).lines() {
+                    let Ok(line) = line else { break };
+                    eprintln!("{line}");
+                    sink.lock().unwrap().push(line);
+                }
+            });
+            logs
+        });
         let stdout = child.stdout.take().expect("piped stdout");
         let (tx, rx) = mpsc::channel();
         std::thread::spawn(move || {
@@ -119,7 +150,41 @@ impl Server {
             grpc_addr: addr("grpc="),
             rest_addr: addr("rest="),
             child,
+            logs,
         }
+    }
+
+    /// The log lines so far (empty unless started with [`Server::start_with_logs`]).
+    pub fn logs(&self) -> Vec<String> {
+        self.logs
+            .as_ref()
+            .map(|l| l.lock().unwrap().clone())
+            .unwrap_or_default()
+    }
+
+    /// The server's resident memory (`VmRSS` of /proc/PID/status), bytes; None off Linux.
+    pub fn rss_bytes(&self) -> Option<u64> {
+        let status = std::fs::read_to_string(format!("/proc/{}/status", self.pid())).ok()?;
+        let kib: u64 = status
+            .lines()
+            .find_map(|l| l.strip_prefix("VmRSS:"))?
+            .trim()
+            .strip_suffix("kB")?
+            .trim()
+            .parse()
+            .ok()?;
+        Some(kib * 1024)
+    }
+
+    /// The `/metrics` exposition.
+    pub async fn metrics(&self) -> String {
+        let response = http()
+            .get(self.rest_url("/metrics"))
+            .send()
+            .await
+            .expect("GET /metrics");
+        assert_eq!(response.status(), 200, "GET /metrics");
+        response.text().await.expect("metrics text")
     }
 
     pub fn grpc_url(&self) -> String {
@@ -294,4 +359,30 @@ pub fn without_timings(mut v: serde_json::Value) -> serde_json::Value {
         o[stage].as_object_mut().unwrap().remove("seconds");
     }
     v
+}
+
+/// The value of the sample `name` whose labels include all of `labels` (summed when several
+/// match), from a Prometheus/OpenMetrics text exposition; None when none matches.
+pub fn metric(text: &str, name: &str, labels: &[(&str, &str)]) -> Option<f64> {
+    let mut found = None;
+    for line in text.lines().filter(|l| !l.starts_with('#')) {
+        let (series, value) = match line.rsplit_once(' ') {
+            Some(split) => split,
+            None => continue,
+        };
+        let (sample, label_text) = match series.split_once('{') {
+            Some((n, rest)) => (n, rest.trim_end_matches('}')),
+            None => (series, ""),
+        };
+        if sample != name {
+            continue;
+        }
+        let has = |k: &str, v: &str| label_text.split(',').any(|kv| kv == format!("{k}=\"{v}\""));
+        if labels.iter().all(|(k, v)| has(k, v))
+            && let Ok(v) = value.parse::<f64>()
+        {
+            *found.get_or_insert(0.0) += v;
+        }
+    }
+    found
 }

@@ -7,6 +7,7 @@ use std::process::{Command, Output};
 fn graspctl(server: &Server, args: &[&str]) -> Output {
     Command::new(binary("graspctl", "GRASPCTL_BIN"))
         .env_remove("GRASPD_SERVER")
+        .env_remove("GRASPD_TOKEN")
         .arg("--server")
         .arg(server.grpc_url())
         .args(args)
@@ -208,4 +209,33 @@ fn stabilize_reports_a_layout_that_does_not_fit_the_recording() {
     let out = graspctl(&server, &["stabilize", "--csv", "/nonexistent.csv"]);
     assert!(!out.status.success());
     assert!(text(&out.stderr).contains("cannot read /nonexistent.csv"));
+}
+
+#[test]
+fn the_token_reaches_a_protected_server() {
+    let server = Server::start_with(&["--auth-token", "graspctl-token"]);
+    let out = graspctl(&server, &["hands"]);
+    assert!(!out.status.success());
+    assert!(
+        text(&out.stderr).contains("Unauthenticated"),
+        "{}",
+        text(&out.stderr)
+    );
+    let out = graspctl(&server, &["--token", "graspctl-token", "hands"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("shadow"));
+    let cloud = cloud_file("token.ply");
+    let out = graspctl(
+        &server,
+        &[
+            "--token",
+            "graspctl-token",
+            "plan",
+            "--cloud",
+            cloud.to_str().unwrap(),
+            "--hand",
+            "parallel_gripper",
+        ],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
 }

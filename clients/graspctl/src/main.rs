@@ -22,6 +22,9 @@ use nalgebra::{Point3, Vector3};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use thiserror::Error;
+use tonic::metadata::{Ascii, MetadataValue};
+use tonic::service::Interceptor;
+use tonic::service::interceptor::InterceptedService;
 use tonic::transport::Channel;
 
 #[derive(Debug, Parser)]
@@ -42,6 +45,9 @@ struct Cli {
     /// Print the server's answer as JSON (the REST API's shape) instead of a summary.
     #[arg(long, global = true)]
     json: bool,
+    /// Bearer token for a server with authentication on (sent as `authorization: Bearer …`).
+    #[arg(long, global = true, env = "GRASPD_TOKEN", hide_env_values = true)]
+    token: Option<String>,
     #[command(subcommand)]
     command: Command,
 }
@@ -169,6 +175,8 @@ pub(crate) enum CliError {
         path: PathBuf,
         source: std::io::Error,
     },
+    #[error("{0}")]
+    Token(String),
     #[error("cannot write JSON: {0}")]
     Json(#[from] serde_json::Error),
 }
@@ -180,13 +188,52 @@ pub(crate) fn read(path: &PathBuf) -> Result<Vec<u8>, CliError> {
     })
 }
 
-async fn connect(server: &str) -> Result<GraspPlannerClient<Channel>, CliError> {
-    GraspPlannerClient::connect(server.to_string())
+/// Adds the bearer token, when one is given, to every call.
+#[derive(Debug, Clone)]
+pub(crate) struct Bearer(Option<MetadataValue<Ascii>>);
+
+impl Bearer {
+    pub(crate) fn new(token: Option<&str>) -> Result<Self, CliError> {
+        token
+            .map(|t| {
+                format!("Bearer {t}")
+                    .parse()
+                    .map_err(|_| CliError::Token("must be visible ASCII".into()))
+            })
+            .transpose()
+            .map(Bearer)
+    }
+}
+
+impl Interceptor for Bearer {
+    fn call(&mut self, mut r: tonic::Request<()>) -> Result<tonic::Request<()>, tonic::Status> {
+        if let Some(v) = &self.0 {
+            r.metadata_mut().insert("authorization", v.clone());
+        }
+        Ok(r)
+    }
+}
+
+/// A channel to `server`.
+pub(crate) async fn channel(server: &str) -> Result<Channel, CliError> {
+    let endpoint = Channel::from_shared(server.to_string())
+        .map_err(|e| CliError::Token(format!("bad server address '{server}': {e}")))?;
+    endpoint
+        .connect()
         .await
         .map_err(|source| CliError::Connect {
             server: server.to_string(),
             source,
         })
+}
+
+type Planner = GraspPlannerClient<InterceptedService<Channel, Bearer>>;
+
+async fn connect(server: &str, token: Option<&str>) -> Result<Planner, CliError> {
+    Ok(GraspPlannerClient::with_interceptor(
+        channel(server).await?,
+        Bearer::new(token)?,
+    ))
 }
 
 /// The encoding of an image file by its magic bytes (the server checks it).
@@ -294,10 +341,12 @@ fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
 
 async fn run(cli: Cli) -> Result<(), CliError> {
     match &cli.command {
-        Command::Stabilize(args) => stabilize::run(&cli.server, args, cli.json).await?,
+        Command::Stabilize(args) => {
+            stabilize::run(&cli.server, cli.token.as_deref(), args, cli.json).await?
+        }
         Command::Plan(args) => {
             let request = convert::plan_request_to_proto(&build_request(args)?);
-            let mut client = connect(&cli.server).await?;
+            let mut client = connect(&cli.server, cli.token.as_deref()).await?;
             let response = client.plan_grasp(request).await?.into_inner();
             let plan = convert::plan_from_proto(response).map_err(CliError::Answer)?;
             if let Some(path) = &args.overlay {
@@ -321,7 +370,7 @@ async fn run(cli: Cli) -> Result<(), CliError> {
             }
         }
         Command::Hands { name: None } => {
-            let mut client = connect(&cli.server).await?;
+            let mut client = connect(&cli.server, cli.token.as_deref()).await?;
             let response = client
                 .list_hands(pb::ListHandsRequest {})
                 .await?
@@ -339,7 +388,7 @@ async fn run(cli: Cli) -> Result<(), CliError> {
             }
         }
         Command::Hands { name: Some(name) } => {
-            let mut client = connect(&cli.server).await?;
+            let mut client = connect(&cli.server, cli.token.as_deref()).await?;
             let response = client
                 .get_hand(pb::GetHandRequest { name: name.clone() })
                 .await?

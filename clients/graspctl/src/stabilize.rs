@@ -262,7 +262,12 @@ fn live_line(i: usize, total: usize, r: &FrameResult) -> String {
     line
 }
 
-pub async fn run(server: &str, args: &StabilizeArgs, as_json: bool) -> Result<(), CliError> {
+pub async fn run(
+    server: &str,
+    token: Option<&str>,
+    args: &StabilizeArgs,
+    as_json: bool,
+) -> Result<(), CliError> {
     let text = String::from_utf8_lossy(&crate::read(&args.csv)?).into_owned();
     let frames = Recording::from_csv(&text, None, None)
         .map_err(|error| CliError::File {
@@ -275,12 +280,10 @@ pub async fn run(server: &str, args: &StabilizeArgs, as_json: bool) -> Result<()
         (Some(a), Some(b)) => b.timestamp - a.timestamp,
         _ => 0.0,
     };
-    let mut client = TactileStabilizerClient::connect(server.to_string())
-        .await
-        .map_err(|source| CliError::Connect {
-            server: server.to_string(),
-            source,
-        })?;
+    let mut client = TactileStabilizerClient::with_interceptor(
+        crate::channel(server).await?,
+        crate::Bearer::new(token)?,
+    );
 
     // Bounded: at most 64 frames wait in this client when the server is slower than the replay.
     let (tx, rx) = mpsc::channel(64);

@@ -171,3 +171,23 @@ def test_stubs_match_the_proto_files(tmp_path):
     assert names == sorted(p.name for p in committed.glob("*.py"))
     match, mismatch, errors = filecmp.cmpfiles(committed, fresh, names, shallow=False)
     assert not mismatch and not errors, f"run clients/python/generate.sh: {mismatch} {errors}"
+
+
+def test_a_token_protected_server_takes_the_clients_token():
+    from conftest import Server
+
+    srv = Server("--auth-token", "s3cret-token")
+    try:
+        with Client(srv.grpc) as c:
+            with pytest.raises(grpc.RpcError) as e:
+                c.list_hands()
+            assert e.value.code() == grpc.StatusCode.UNAUTHENTICATED
+        with Client(srv.grpc, token="wrong") as c:
+            with pytest.raises(grpc.RpcError) as e:
+                c.list_hands()
+            assert e.value.code() == grpc.StatusCode.UNAUTHENTICATED
+        with Client(srv.grpc, token="s3cret-token") as c:
+            assert any(h.name == "parallel_gripper" for h in c.list_hands())
+            assert len(c.plan_cloud(can(), hand="parallel_gripper", seed=1).contacts) == 2
+    finally:
+        srv.stop()

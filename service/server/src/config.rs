@@ -3,7 +3,8 @@
 //! clap resolves flag over environment; whatever neither gives falls back to the file and then
 //! to the defaults, so every flag is an `Option` here.
 
-use crate::facade::{HandSetup, Limits};
+use crate::facade::{HandSetup, Limits, QUEUED_PLANS_PER_PLANNER};
+use crate::ops::Tokens;
 use clap::{Parser, ValueEnum};
 use graspd_core::cloud::MIN_POINTS;
 use serde::{Deserialize, Serialize};
@@ -36,6 +37,24 @@ pub struct Cli {
     /// Plans computed at once; further requests wait [default: number of CPUs].
     #[arg(long, env = "GRASPD_MAX_CONCURRENT_PLANS", value_name = "N")]
     pub max_concurrent_plans: Option<usize>,
+    /// Plan requests waiting for a planner; one more is shed with RESOURCE_EXHAUSTED / 503 and
+    /// a retry hint [default: 4 × max_concurrent_plans].
+    #[arg(long, env = "GRASPD_MAX_QUEUED_PLANS", value_name = "N")]
+    pub max_queued_plans: Option<usize>,
+    /// A bearer token that gRPC and REST requests must carry (`authorization: Bearer TOKEN`);
+    /// repeatable (environment: comma-separated). Replaces the config file's `auth_tokens`.
+    /// Without any token, authentication is off. Probes and /metrics stay open.
+    #[arg(
+        long = "auth-token",
+        env = "GRASPD_AUTH_TOKENS",
+        value_name = "TOKEN",
+        value_delimiter = ',',
+        hide_env_values = true
+    )]
+    pub auth_tokens: Vec<String>,
+    /// A file of bearer tokens, one per line (`#` comments), added to the others.
+    #[arg(long, env = "GRASPD_AUTH_TOKENS_FILE", value_name = "FILE")]
+    pub auth_tokens_file: Option<PathBuf>,
     /// Tactile sessions open at once (streams and analyze calls); more are refused [default: 64].
     #[arg(long, env = "GRASPD_MAX_TACTILE_SESSIONS", value_name = "N")]
     pub max_tactile_sessions: Option<usize>,
@@ -91,8 +110,13 @@ pub struct FileConfig {
     pub max_message_bytes: Option<usize>,
     pub max_points: Option<usize>,
     pub max_concurrent_plans: Option<usize>,
+    pub max_queued_plans: Option<usize>,
     pub max_tactile_sessions: Option<usize>,
     pub max_image_pixels: Option<usize>,
+    /// Bearer tokens, as `--auth-token`.
+    #[serde(default)]
+    pub auth_tokens: Vec<String>,
+    pub auth_tokens_file: Option<PathBuf>,
     pub grasp_type_model: Option<PathBuf>,
     pub onnxruntime: Option<PathBuf>,
     pub model_threads: Option<usize>,
@@ -112,8 +136,14 @@ pub struct Settings {
     pub max_message_bytes: usize,
     pub max_points: usize,
     pub max_concurrent_plans: usize,
+    pub max_queued_plans: usize,
     pub max_tactile_sessions: usize,
     pub max_image_pixels: usize,
+    /// Never printed: `--print-config` shows their count in a comment.
+    #[serde(skip)]
+    pub auth_tokens: Tokens,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub auth_tokens_file: Option<PathBuf>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub grasp_type_model: Option<PathBuf>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -160,6 +190,36 @@ impl Settings {
             None => FileConfig::default(),
         };
         let d = Limits::default();
+        let max_concurrent_plans = cli
+            .max_concurrent_plans
+            .or(file.max_concurrent_plans)
+            .unwrap_or(d.max_concurrent_plans);
+        let invalid_tokens = |message| ConfigError::Invalid {
+            field: "auth_tokens",
+            message,
+        };
+        let mut auth_tokens = if cli.auth_tokens.is_empty() {
+            Tokens::new(&file.auth_tokens, "auth_tokens").map_err(invalid_tokens)?
+        } else {
+            Tokens::new(&cli.auth_tokens, "--auth-token / GRASPD_AUTH_TOKENS")
+                .map_err(invalid_tokens)?
+        };
+        let auth_tokens_file = cli.auth_tokens_file.clone().or(file.auth_tokens_file);
+        if let Some(path) = &auth_tokens_file {
+            let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+                path: path.clone(),
+                source,
+            })?;
+            let from_file =
+                Tokens::parse_file(&text, &path.display().to_string()).map_err(invalid_tokens)?;
+            if from_file.is_empty() {
+                return Err(invalid_tokens(format!(
+                    "{} holds no token (one per line)",
+                    path.display()
+                )));
+            }
+            auth_tokens = auth_tokens.merge(from_file);
+        }
         let settings = Settings {
             grpc_addr: cli
                 .grpc_addr
@@ -174,10 +234,11 @@ impl Settings {
                 .or(file.max_message_bytes)
                 .unwrap_or(d.max_message_bytes),
             max_points: cli.max_points.or(file.max_points).unwrap_or(d.max_points),
-            max_concurrent_plans: cli
-                .max_concurrent_plans
-                .or(file.max_concurrent_plans)
-                .unwrap_or(d.max_concurrent_plans),
+            max_concurrent_plans,
+            max_queued_plans: cli
+                .max_queued_plans
+                .or(file.max_queued_plans)
+                .unwrap_or(QUEUED_PLANS_PER_PLANNER.saturating_mul(max_concurrent_plans)),
             max_tactile_sessions: cli
                 .max_tactile_sessions
                 .or(file.max_tactile_sessions)
@@ -186,6 +247,8 @@ impl Settings {
                 .max_image_pixels
                 .or(file.max_image_pixels)
                 .unwrap_or(d.max_image_pixels),
+            auth_tokens,
+            auth_tokens_file,
             grasp_type_model: cli.grasp_type_model.clone().or(file.grasp_type_model),
             onnxruntime: cli.onnxruntime.clone().or(file.onnxruntime),
             model_threads: cli.model_threads.or(file.model_threads).unwrap_or(1),
@@ -275,6 +338,7 @@ impl Settings {
             max_message_bytes: self.max_message_bytes,
             max_points: self.max_points,
             max_concurrent_plans: self.max_concurrent_plans,
+            max_queued_plans: self.max_queued_plans,
             max_tactile_sessions: self.max_tactile_sessions,
             max_image_pixels: self.max_image_pixels,
         }
@@ -366,6 +430,48 @@ mod tests {
             ]
         );
         assert!(Cli::try_parse_from(["graspd", "--import-hand", "nopath"]).is_err());
+    }
+
+    #[test]
+    fn queue_and_tokens() {
+        let s = Settings::resolve(&cli(&["--max-concurrent-plans", "3"])).unwrap();
+        assert_eq!(s.max_queued_plans, 12);
+        assert!(s.auth_tokens.is_empty());
+        let dir = std::env::temp_dir().join(format!("graspd-tokens-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let tokens = dir.join("tokens");
+        std::fs::write(&tokens, "# fleet\nfile-token\n").unwrap();
+        let config = dir.join("graspd.toml");
+        std::fs::write(
+            &config,
+            "auth_tokens = [\"file-a\", \"file-b\"]\nmax_queued_plans = 0\n",
+        )
+        .unwrap();
+        let c = config.to_str().unwrap();
+        let t = tokens.to_str().unwrap();
+        let s = Settings::resolve(&cli(&["--config", c])).unwrap();
+        assert_eq!((s.auth_tokens.len(), s.max_queued_plans), (2, 0));
+        let s = Settings::resolve(&cli(&[
+            "--config",
+            c,
+            "--auth-token",
+            "flag-token",
+            "--auth-tokens-file",
+            t,
+        ]))
+        .unwrap();
+        assert_eq!(s.auth_tokens.len(), 2);
+        assert!(s.auth_tokens.accepts(Some(b"Bearer flag-token")));
+        assert!(s.auth_tokens.accepts(Some(b"Bearer file-token")));
+        assert!(!s.auth_tokens.accepts(Some(b"Bearer file-a")));
+        let printed = toml::to_string(&s).unwrap();
+        assert!(
+            !printed.contains("token\"") && !printed.contains("flag-token"),
+            "{printed}"
+        );
+        assert!(!format!("{s:?}").contains("flag-token"));
+        assert!(Settings::resolve(&cli(&["--auth-token", "a b"])).is_err());
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

@@ -34,6 +34,8 @@ pub struct Limits {
     pub max_points: usize,
     /// Plans computed at once; more wait (planning is CPU-bound).
     pub max_concurrent_plans: usize,
+    /// Plan requests waiting for a planner; more are shed (RESOURCE_EXHAUSTED, 503).
+    pub max_queued_plans: usize,
     /// Tactile sessions open at once (streams and analyze calls); more are refused
     /// (RESOURCE_EXHAUSTED, 503).
     pub max_tactile_sessions: usize,
@@ -44,12 +46,20 @@ pub struct Limits {
 /// Default of [`Limits::max_tactile_sessions`].
 pub const DEFAULT_MAX_TACTILE_SESSIONS: usize = 64;
 
+/// Default of [`Limits::max_queued_plans`], per planner of `max_concurrent_plans`.
+pub const QUEUED_PLANS_PER_PLANNER: usize = 4;
+
+fn default_concurrent_plans() -> usize {
+    std::thread::available_parallelism().map_or(2, |n| n.get())
+}
+
 impl Default for Limits {
     fn default() -> Self {
         Self {
             max_message_bytes: 32 * 1024 * 1024,
             max_points: 500_000,
-            max_concurrent_plans: std::thread::available_parallelism().map_or(2, |n| n.get()),
+            max_concurrent_plans: default_concurrent_plans(),
+            max_queued_plans: QUEUED_PLANS_PER_PLANNER * default_concurrent_plans(),
             max_tactile_sessions: DEFAULT_MAX_TACTILE_SESSIONS,
             max_image_pixels: RgbdLimits::default().max_pixels,
         }
@@ -200,6 +210,10 @@ pub enum ServiceError {
     /// A configured capacity is used up, retry later (RESOURCE_EXHAUSTED, 503).
     #[error("{0}")]
     Exhausted(String),
+    /// The planner's queue is full: the request was shed, retry in a second
+    /// (RESOURCE_EXHAUSTED with `retry-after-ms`, 503 with `Retry-After`).
+    #[error("{0}")]
+    Overloaded(String),
     /// A name is taken (ALREADY_EXISTS, 409).
     #[error(transparent)]
     AlreadyExists(FieldError),

@@ -6,6 +6,7 @@ pub mod config;
 pub mod facade;
 pub mod grpc;
 pub mod hand_store;
+pub mod ops;
 pub mod rest;
 pub mod runner;
 pub mod server;

@@ -18,6 +18,11 @@ fn main() -> ExitCode {
         match toml::to_string(&settings) {
             Ok(text) => {
                 print!("{text}");
+                // The tokens themselves are never printed.
+                println!(
+                    "# auth_tokens: {} configured (not shown)",
+                    settings.auth_tokens.len()
+                );
                 return ExitCode::SUCCESS;
             }
             Err(e) => {

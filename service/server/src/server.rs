@@ -3,6 +3,7 @@
 
 use crate::config::Settings;
 use crate::facade::GraspService;
+use crate::ops::{Ops, ReadyState};
 use crate::runner::PlanRunner;
 use crate::{grpc, rest};
 use graspd_core::perception::{GraspTypeModel, init_onnx_runtime};
@@ -78,17 +79,27 @@ pub async fn run(
     let grpc_addr = grpc_listener.local_addr().map_err(ServeError::Announce)?;
     let rest_addr = rest_listener.local_addr().map_err(ServeError::Announce)?;
 
-    let runner = PlanRunner::new(service);
+    let ops = Ops::new(settings.auth_tokens.clone());
+    let runner = PlanRunner::new(service, ops.metrics.clone());
     let (stop, stopped) = watch::channel(());
     let wait = |mut rx: watch::Receiver<()>| async move {
         let _ = rx.changed().await;
     };
+    // Hands and models are loaded and both ports bound: ready (the servers, spawned next, start
+    // from this state, so the first probe already sees it).
+    ops.readiness.set(ReadyState::Ready);
     let mut grpc_task = tokio::spawn(grpc::serve(
         grpc_listener,
         runner.clone(),
+        ops.clone(),
         wait(stopped.clone()),
     ));
-    let mut rest_task = tokio::spawn(rest::serve(rest_listener, runner, wait(stopped)));
+    let mut rest_task = tokio::spawn(rest::serve(
+        rest_listener,
+        runner,
+        ops.clone(),
+        wait(stopped),
+    ));
 
     {
         let mut out = std::io::stdout().lock();
@@ -102,6 +113,8 @@ pub async fn run(
         max_message_bytes = settings.max_message_bytes,
         max_points = settings.max_points,
         max_concurrent_plans = settings.max_concurrent_plans,
+        max_queued_plans = settings.max_queued_plans,
+        auth_tokens = settings.auth_tokens.len(),
         max_tactile_sessions = settings.max_tactile_sessions,
         "graspd listening"
     );
@@ -118,6 +131,7 @@ pub async fn run(
         }
     }
     tracing::info!("shutting down: draining in-flight requests");
+    ops.readiness.set(ReadyState::Draining);
     let _ = stop.send(());
     let drained = tokio::time::timeout(DRAIN_TIMEOUT, async {
         if !grpc_task.is_finished() {

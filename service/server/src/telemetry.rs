@@ -1,4 +1,7 @@
 //! Structured logs on stderr (stdout carries only the `graspd listening …` line).
+//!
+//! Each request's lines carry its `request` span (`request_id`, `transport`, `route`): a prefix
+//! in the pretty format, the `span` object in JSON.
 
 use crate::config::LogFormat;
 use tracing_subscriber::EnvFilter;
@@ -14,7 +17,11 @@ pub fn init(filter: &str, format: LogFormat) -> Result<(), String> {
         LogFormat::Pretty => builder
             .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
             .try_init(),
-        LogFormat::Json => builder.json().with_current_span(false).try_init(),
+        LogFormat::Json => builder
+            .json()
+            .with_current_span(true)
+            .with_span_list(false)
+            .try_init(),
     };
     result.map_err(|e| format!("log: {e}"))
 }

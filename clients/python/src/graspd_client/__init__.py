@@ -17,6 +17,7 @@ turn numpy arrays into them and back. Errors are ``grpc.RpcError`` with the serv
 
 from __future__ import annotations
 
+import collections
 import queue
 from dataclasses import dataclass, field
 from typing import Iterable, Optional, Sequence
@@ -191,22 +192,52 @@ class StabilizerSession:
         self.close()
 
 
+class _ClientCallDetails(
+        collections.namedtuple("_ClientCallDetails",
+                               ("method", "timeout", "metadata", "credentials", "wait_for_ready",
+                                "compression")),
+        grpc.ClientCallDetails):
+    pass
+
+
+class _Bearer(grpc.UnaryUnaryClientInterceptor, grpc.StreamStreamClientInterceptor):
+    """Adds ``authorization: Bearer <token>`` to every call."""
+
+    def __init__(self, token: str):
+        self._header = ("authorization", f"Bearer {token}")
+
+    def _details(self, d):
+        metadata = list(d.metadata or ()) + [self._header]
+        return _ClientCallDetails(d.method, d.timeout, metadata, d.credentials,
+                                  getattr(d, "wait_for_ready", None),
+                                  getattr(d, "compression", None))
+
+    def intercept_unary_unary(self, continuation, client_call_details, request):
+        return continuation(self._details(client_call_details), request)
+
+    def intercept_stream_stream(self, continuation, client_call_details, request_iterator):
+        return continuation(self._details(client_call_details), request_iterator)
+
+
 class Client:
-    """A connection to graspd's gRPC port."""
+    """A connection to graspd's gRPC port. ``token``: the bearer token of a server with
+    authentication on (sent as ``authorization: Bearer …`` with every call)."""
 
     def __init__(self, address: str = "localhost:50051", timeout: Optional[float] = 30.0,
-                 max_message_bytes: int = 64 << 20):
+                 max_message_bytes: int = 64 << 20, token: Optional[str] = None):
         options = [
             ("grpc.max_send_message_length", max_message_bytes),
             ("grpc.max_receive_message_length", max_message_bytes),
         ]
-        self._channel = grpc.insecure_channel(address, options=options)
+        self._raw_channel = grpc.insecure_channel(address, options=options)
+        self._channel = (grpc.intercept_channel(self._raw_channel, _Bearer(token))
+                         if token is not None else self._raw_channel)
         self._planner = grasp_planner_pb2_grpc.GraspPlannerStub(self._channel)
         self._tactile = tactile_stabilizer_pb2_grpc.TactileStabilizerStub(self._channel)
         self.timeout = timeout
 
     def close(self) -> None:
-        self._channel.close()
+        self._raw_channel.close()
 
     def __enter__(self) -> "Client":
         return self

@@ -2,6 +2,7 @@
 
 use super::convert;
 use super::status::to_status;
+use crate::ops::Transport;
 use crate::runner::PlanRunner;
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::grasp_planner_server::GraspPlanner;
@@ -26,7 +27,11 @@ impl GraspPlanner for GraspPlannerService {
         let limits = *self.runner.service().limits();
         let request =
             convert::plan_request_from_proto(request.into_inner(), &limits).map_err(to_status)?;
-        let plan = self.runner.plan(request, "grpc").await.map_err(to_status)?;
+        let plan = self
+            .runner
+            .plan(request, Transport::Grpc)
+            .await
+            .map_err(to_status)?;
         Ok(Response::new(convert::plan_to_proto(&plan)))
     }
 

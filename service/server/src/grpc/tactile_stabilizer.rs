@@ -19,6 +19,7 @@ use tokio::sync::mpsc;
 use tokio_stream::Stream;
 use tokio_stream::wrappers::ReceiverStream;
 use tonic::{Request, Response, Status, Streaming};
+use tracing::Instrument;
 
 /// Answers buffered per session before the server stops reading frames.
 pub const SESSION_QUEUE: usize = 16;
@@ -65,31 +66,34 @@ impl TactileStabilizer for TactileStabilizerService {
             "tactile session opened"
         );
         let (tx, rx) = mpsc::channel(SESSION_QUEUE);
-        tokio::spawn(async move {
-            loop {
-                let message = tokio::select! {
-                    () = tx.closed() => break,
-                    m = inbound.message() => m,
-                };
-                let message = match message {
-                    Ok(Some(m)) => m,
-                    // The client finished sending, or the connection failed.
-                    Ok(None) | Err(_) => break,
-                };
-                let index = session.frames();
-                let answer = convert::stabilize_frame_from_proto(message)
-                    .map_err(ServiceError::from)
-                    .and_then(|frame| session.step(&frame))
-                    .map(|r| convert::setpoint_to_proto(&r, index))
-                    .map_err(to_status);
-                let failed = answer.is_err();
-                if tx.send(answer).await.is_err() || failed {
-                    break;
+        tokio::spawn(
+            async move {
+                loop {
+                    let message = tokio::select! {
+                        () = tx.closed() => break,
+                        m = inbound.message() => m,
+                    };
+                    let message = match message {
+                        Ok(Some(m)) => m,
+                        // The client finished sending, or the connection failed.
+                        Ok(None) | Err(_) => break,
+                    };
+                    let index = session.frames();
+                    let answer = convert::stabilize_frame_from_proto(message)
+                        .map_err(ServiceError::from)
+                        .and_then(|frame| session.step(&frame))
+                        .map(|r| convert::setpoint_to_proto(&r, index))
+                        .map_err(to_status);
+                    let failed = answer.is_err();
+                    if tx.send(answer).await.is_err() || failed {
+                        break;
+                    }
                 }
+                tracing::debug!(frames = session.frames(), "tactile session closed");
+                drop(session);
             }
-            tracing::debug!(frames = session.frames(), "tactile session closed");
-            drop(session);
-        });
+            .in_current_span(),
+        );
         Ok(Response::new(Box::pin(ReceiverStream::new(rx))))
     }
 }

@@ -2,10 +2,16 @@
 
 use super::json::{ErrorDetailJson, ErrorJson};
 use crate::facade::ServiceError;
+use crate::ops::edge::{AnswerCode, Refusal};
+use crate::runner::SHED_RETRY_AFTER;
 use axum::Json;
-use axum::http::StatusCode;
+use axum::http::header::{CONTENT_TYPE, RETRY_AFTER, WWW_AUTHENTICATE};
+use axum::http::{HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Response};
+use bytes::Bytes;
 use graspd_core::FieldError;
+use std::borrow::Cow;
+use std::time::Duration;
 
 #[derive(Debug, Clone)]
 pub struct ApiError {
@@ -13,6 +19,8 @@ pub struct ApiError {
     pub code: &'static str,
     pub field: Option<String>,
     pub message: String,
+    /// Sent as `Retry-After` (whole seconds, at least 1).
+    pub retry_after: Option<Duration>,
 }
 
 impl ApiError {
@@ -22,6 +30,7 @@ impl ApiError {
             code,
             field: None,
             message: message.into(),
+            retry_after: None,
         }
     }
 
@@ -31,6 +40,7 @@ impl ApiError {
             code,
             field: Some(e.field),
             message: e.message,
+            retry_after: None,
         }
     }
 
@@ -59,6 +69,10 @@ impl From<ServiceError> for ApiError {
             ServiceError::Exhausted(m) => {
                 Self::new(StatusCode::SERVICE_UNAVAILABLE, "resource_exhausted", m)
             }
+            ServiceError::Overloaded(m) => Self {
+                retry_after: Some(SHED_RETRY_AFTER),
+                ..Self::new(StatusCode::SERVICE_UNAVAILABLE, "resource_exhausted", m)
+            },
             ServiceError::Unimplemented(m) => Self::not_implemented(m),
             ServiceError::Internal(m) => {
                 Self::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", m)
@@ -73,15 +87,77 @@ impl From<FieldError> for ApiError {
     }
 }
 
-impl IntoResponse for ApiError {
-    fn into_response(self) -> Response {
-        let body = ErrorJson {
+impl ApiError {
+    fn retry_after_header(&self) -> Option<HeaderValue> {
+        self.retry_after
+            .map(|d| HeaderValue::from(d.as_secs_f64().ceil().max(1.0) as u64))
+    }
+
+    fn body(self) -> ErrorJson {
+        ErrorJson {
             error: ErrorDetailJson {
                 code: self.code.into(),
                 field: self.field,
                 message: self.message,
             },
-        };
-        (self.status, Json(body)).into_response()
+        }
     }
+}
+
+impl IntoResponse for ApiError {
+    fn into_response(self) -> Response {
+        let status = self.status;
+        let retry_after = self.retry_after_header();
+        let mut response = (status, Json(self.body())).into_response();
+        if let Some(v) = retry_after {
+            response.headers_mut().insert(RETRY_AFTER, v);
+        }
+        response
+    }
+}
+
+/// The answer to a request the edge layer refuses: the same JSON error as the handlers'.
+pub fn refusal(refusal: &Refusal) -> axum::http::Response<Bytes> {
+    let error = match refusal {
+        Refusal::Unauthenticated => ApiError::new(
+            StatusCode::UNAUTHORIZED,
+            "unauthenticated",
+            "missing or wrong bearer token: send the header `authorization: Bearer <token>`",
+        ),
+        Refusal::DeadlineExceeded(timeout) => ApiError::new(
+            StatusCode::GATEWAY_TIMEOUT,
+            "deadline_exceeded",
+            format!(
+                "the deadline (x-request-timeout-ms: {}) passed before the answer was ready",
+                timeout.as_millis()
+            ),
+        ),
+        Refusal::BadTimeout(message) => ApiError {
+            field: Some(super::REQUEST_TIMEOUT_HEADER.into()),
+            ..ApiError::new(StatusCode::BAD_REQUEST, "invalid_argument", message.clone())
+        },
+    };
+    let status = error.status;
+    let body = serde_json::to_vec(&error.body()).unwrap_or_default();
+    let mut response = axum::http::Response::new(Bytes::from(body));
+    *response.status_mut() = status;
+    response
+        .headers_mut()
+        .insert(CONTENT_TYPE, HeaderValue::from_static("application/json"));
+    if *refusal == Refusal::Unauthenticated {
+        response
+            .headers_mut()
+            .insert(WWW_AUTHENTICATE, HeaderValue::from_static("Bearer"));
+    }
+    response
+}
+
+/// The metrics code of a REST answer: its status.
+pub fn code_of(status: StatusCode) -> AnswerCode {
+    let code = match status.as_u16() {
+        200 => Cow::Borrowed("200"),
+        101 => Cow::Borrowed("101"),
+        n => Cow::Owned(n.to_string()),
+    };
+    (code, status.is_client_error() || status.is_server_error())
 }

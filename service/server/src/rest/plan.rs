@@ -8,6 +8,7 @@
 use super::error::ApiError;
 use super::json::{self, PlanRequestJson, PlanResponseJson};
 use crate::facade::{Limits, PlanRequest, PlanSource};
+use crate::ops::Transport;
 use crate::runner::PlanRunner;
 use axum::Json;
 use axum::body::Bytes;
@@ -84,7 +85,7 @@ pub async fn plan(
         }
         plan_request.output.overlay = true;
     }
-    let plan = runner.plan(plan_request, "rest").await?;
+    let plan = runner.plan(plan_request, Transport::Rest).await?;
     if png {
         let bytes = plan
             .perception

@@ -1,0 +1,231 @@
+//! Overload against the real server (issue 8): a burst beyond the planner's concurrency and
+//! queue gets plans or the shedding status (RESOURCE_EXHAUSTED with `retry-after-ms`, 503 with
+//! `Retry-After`), none hangs and memory stays bounded; a caller's deadline is honoured while
+//! queued or planning (DEADLINE_EXCEEDED, 504), and the planner keeps working afterwards.
+
+use graspd_e2e::{
+    Server, assert_valid_plan_works, base64, cylinder, grpc_request_with_points, http, metric,
+    packed, rest_error,
+};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+use tonic::Code;
+use tonic::codegen::http::Uri;
+
+type RawClient = graspd_proto::v1::grasp_planner_client::GraspPlannerClient<
+    hyper_util::client::legacy::Client<
+        hyper_util::client::legacy::connect::HttpConnector,
+        tonic::body::Body,
+    >,
+>;
+
+/// A gRPC client over a plain HTTP/2 connection: it sends `grpc-timeout` but, unlike tonic's
+/// channel (which answers CANCELLED "Timeout expired" itself at the deadline), waits for the
+/// server's answer, so the test sees what the server says.
+fn raw_grpc(server: &Server) -> RawClient {
+    let client = hyper_util::client::legacy::Client::builder(hyper_util::rt::TokioExecutor::new())
+        .http2_only(true)
+        .build_http();
+    let origin: Uri = server.grpc_url().parse().unwrap();
+    RawClient::with_origin(client, origin)
+}
+
+/// Points of the large clouds: each plan takes tens of milliseconds or more.
+const LARGE: usize = 100_000;
+
+fn large_packed() -> Vec<u8> {
+    packed(&cylinder(LARGE))
+}
+
+fn large_json(points: &[u8]) -> serde_json::Value {
+    serde_json::json!({
+        "cloud": {"points": base64(points)},
+        "hand_name": "shadow",
+        "options": {"seed": 3},
+        "hints": {"support_plane": {"normal": [0, 0, 1], "offset": 0}},
+    })
+}
+
+#[derive(Debug, PartialEq, Eq)]
+enum Answer {
+    Planned,
+    Shed,
+}
+
+/// Samples the server's RSS every 10 ms until stopped; returns the peak.
+fn watch_rss(server: &Server) -> (Arc<AtomicBool>, std::thread::JoinHandle<u64>) {
+    let stop = Arc::new(AtomicBool::new(false));
+    let peak = Arc::new(AtomicU64::new(0));
+    let path = format!("/proc/{}/status", server.pid());
+    let (s, p) = (stop.clone(), peak.clone());
+    let handle = std::thread::spawn(move || {
+        while !s.load(Ordering::Relaxed) {
+            if let Some(kib) = std::fs::read_to_string(&path).ok().and_then(|t| {
+                t.lines()
+                    .find_map(|l| l.strip_prefix("VmRSS:"))
+                    .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+            }) {
+                p.fetch_max(kib * 1024, Ordering::Relaxed);
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        p.load(Ordering::Relaxed)
+    });
+    (stop, handle)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 4)]
+async fn a_burst_gets_plans_or_shedding_none_hangs_and_memory_stays_bounded() {
+    const CONCURRENCY: usize = 1;
+    const QUEUE: usize = 2;
+    const BURST: usize = 4 * (CONCURRENCY + QUEUE);
+    let server = Server::start_with(&["--max-concurrent-plans", "1", "--max-queued-plans", "2"]);
+    let points = large_packed();
+    let json = Arc::new(large_json(&points));
+    let grpc = server.grpc().await;
+    let (stop, rss) = watch_rss(&server);
+    let started = Instant::now();
+
+    let mut tasks = tokio::task::JoinSet::new();
+    for i in 0..BURST {
+        if i % 2 == 0 {
+            let mut client = grpc.clone();
+            let request = grpc_request_with_points(points.clone(), "shadow", 3);
+            tasks.spawn(async move {
+                match client.plan_grasp(request).await {
+                    Ok(_) => Answer::Planned,
+                    Err(status) => {
+                        assert_eq!(status.code(), Code::ResourceExhausted, "{status:?}");
+                        assert_eq!(status.metadata().get("retry-after-ms").unwrap(), "1000");
+                        assert!(status.message().contains("max_queued_plans"), "{status:?}");
+                        Answer::Shed
+                    }
+                }
+            });
+        } else {
+            let url = server.rest_url("/v1/plan");
+            let body = json.clone();
+            tasks.spawn(async move {
+                let response = http().post(url).json(&*body).send().await.unwrap();
+                if response.status() == 200 {
+                    return Answer::Planned;
+                }
+                assert_eq!(response.headers()["retry-after"], "1");
+                let (status, code, _, message) = rest_error(response).await;
+                assert_eq!(
+                    (status, code.as_str()),
+                    (503, "resource_exhausted"),
+                    "{message}"
+                );
+                Answer::Shed
+            });
+        }
+    }
+    let answers = tokio::time::timeout(Duration::from_secs(180), tasks.join_all())
+        .await
+        .expect("the burst hung");
+    let elapsed = started.elapsed();
+    stop.store(true, Ordering::Relaxed);
+    let peak = rss.join().unwrap();
+
+    let shed = answers.iter().filter(|a| **a == Answer::Shed).count();
+    let planned = answers.len() - shed;
+    eprintln!(
+        "burst of {BURST}: {planned} planned, {shed} shed in {elapsed:?}; peak RSS {} MB",
+        peak >> 20
+    );
+    assert_eq!(answers.len(), BURST);
+    assert!(shed >= 1, "nothing was shed");
+    assert!(planned >= 1, "nothing was planned");
+    assert!(peak > 0 && peak < 300 << 20, "peak RSS {} MB", peak >> 20);
+    let after = server.rss_bytes().expect("VmRSS");
+    assert!(after < 300 << 20, "RSS after the burst {} MB", after >> 20);
+
+    let text = server.metrics().await;
+    assert_eq!(
+        metric(&text, "graspd_shed_requests_total", &[]),
+        Some(shed as f64),
+        "{text}"
+    );
+    assert_eq!(metric(&text, "graspd_plans_queued", &[]), Some(0.0));
+    assert_eq!(metric(&text, "graspd_plans_running", &[]), Some(0.0));
+    assert_valid_plan_works(&server).await;
+}
+
+#[tokio::test]
+async fn an_expired_deadline_gets_deadline_exceeded_and_the_next_request_works() {
+    let server = Server::start_with(&["--max-concurrent-plans", "1", "--max-queued-plans", "4"]);
+    let points = large_packed();
+    let mut grpc = server.grpc().await;
+
+    // How long a large plan takes here.
+    let started = Instant::now();
+    grpc.plan_grasp(grpc_request_with_points(points.clone(), "shadow", 3))
+        .await
+        .unwrap();
+    let plan_time = started.elapsed();
+
+    let mut raw = raw_grpc(&server);
+    let mut request = tonic::Request::new(grpc_request_with_points(points.clone(), "shadow", 3));
+    request.set_timeout(Duration::from_millis(1));
+    let status = raw.plan_grasp(request).await.unwrap_err();
+    assert_eq!(status.code(), Code::DeadlineExceeded, "{status:?}");
+
+    // A deadline that passes while planning: answered at the deadline, not when the plan ends.
+    let budget = (plan_time / 4).max(Duration::from_millis(5));
+    let mut request = tonic::Request::new(grpc_request_with_points(points.clone(), "shadow", 3));
+    request.set_timeout(budget);
+    let started = Instant::now();
+    let status = raw.plan_grasp(request).await.unwrap_err();
+    let answered = started.elapsed();
+    assert_eq!(status.code(), Code::DeadlineExceeded, "{status:?}");
+    eprintln!("plan {plan_time:?}; deadline {budget:?} answered after {answered:?}");
+    assert!(
+        answered < budget + Duration::from_millis(500),
+        "answered after {answered:?} for a {budget:?} deadline"
+    );
+
+    // REST: the optional x-request-timeout-ms header, and a bad value named.
+    let response = http()
+        .post(server.rest_url("/v1/plan"))
+        .header("x-request-timeout-ms", "1")
+        .json(&large_json(&points))
+        .send()
+        .await
+        .unwrap();
+    let (status, code, _, _) = rest_error(response).await;
+    assert_eq!((status, code.as_str()), (504, "deadline_exceeded"));
+    let response = http()
+        .post(server.rest_url("/v1/plan"))
+        .header("x-request-timeout-ms", "soon")
+        .json(&large_json(&points))
+        .send()
+        .await
+        .unwrap();
+    let (status, code, field, _) = rest_error(response).await;
+    assert_eq!((status, code.as_str()), (400, "invalid_argument"));
+    assert_eq!(field.as_deref(), Some("x-request-timeout-ms"));
+
+    // The abandoned plans end in the background and give their planner back: with one planner,
+    // the next requests (which wait for it) still plan, on both transports.
+    assert_valid_plan_works(&server).await;
+    let mut request = tonic::Request::new(grpc_request_with_points(points, "shadow", 3));
+    request.set_timeout(Duration::from_secs(60));
+    grpc.plan_grasp(request).await.unwrap();
+    let text = server.metrics().await;
+    assert_eq!(
+        metric(
+            &text,
+            "graspd_request_errors_total",
+            &[("code", "DEADLINE_EXCEEDED")]
+        ),
+        Some(2.0),
+        "{text}"
+    );
+    assert_eq!(
+        metric(&text, "graspd_request_errors_total", &[("code", "504")]),
+        Some(1.0)
+    );
+    assert_eq!(metric(&text, "graspd_plans_running", &[]), Some(0.0));
+}
