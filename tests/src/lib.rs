@@ -92,6 +92,9 @@ impl Server {
             "GRASPD_LOG_FORMAT",
             "GRASPD_HANDS_DIR",
             "GRASPD_IMPORT_HANDS",
+            "GRASPD_TLS_CERT",
+            "GRASPD_TLS_KEY",
+            "GRASPD_TLS_CLIENT_CA",
         ] {
             command.env_remove(var);
         }

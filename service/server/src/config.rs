@@ -5,6 +5,7 @@
 
 use crate::facade::{HandSetup, Limits, QUEUED_PLANS_PER_PLANNER};
 use crate::ops::Tokens;
+use crate::tls::TlsFiles;
 use clap::{Parser, ValueEnum};
 use graspd_core::cloud::MIN_POINTS;
 use serde::{Deserialize, Serialize};
@@ -86,6 +87,17 @@ pub struct Cli {
     /// repeatable (environment: comma-separated). Replaces the config file's `import_hands`.
     #[arg(long = "import-hand", env = "GRASPD_IMPORT_HANDS", value_name = "NAME=PATH", value_delimiter = ',', value_parser = parse_import)]
     pub import_hands: Vec<(String, PathBuf)>,
+    /// TLS certificate chain (PEM, server certificate first) for both ports; needs --tls-key
+    /// [default: none: plain HTTP/2 and HTTP].
+    #[arg(long, env = "GRASPD_TLS_CERT", value_name = "FILE")]
+    pub tls_cert: Option<PathBuf>,
+    /// The private key (PEM: PKCS#8, PKCS#1 or SEC1) of --tls-cert.
+    #[arg(long, env = "GRASPD_TLS_KEY", value_name = "FILE")]
+    pub tls_key: Option<PathBuf>,
+    /// CA certificates (PEM): with TLS on, clients of both ports must present a certificate
+    /// signed by one of them (mutual TLS); others are refused at the handshake.
+    #[arg(long, env = "GRASPD_TLS_CLIENT_CA", value_name = "FILE")]
+    pub tls_client_ca: Option<PathBuf>,
     /// Print the effective configuration as TOML and exit.
     #[arg(long)]
     pub print_config: bool,
@@ -126,6 +138,9 @@ pub struct FileConfig {
     /// `["NAME=PATH", …]`, as `--import-hand`.
     #[serde(default)]
     pub import_hands: Vec<String>,
+    pub tls_cert: Option<PathBuf>,
+    pub tls_key: Option<PathBuf>,
+    pub tls_client_ca: Option<PathBuf>,
 }
 
 /// The effective configuration.
@@ -155,6 +170,13 @@ pub struct Settings {
     pub hands_dir: Option<PathBuf>,
     /// `NAME=PATH` entries.
     pub import_hands: Vec<String>,
+    /// PEM files of TLS (paths only: the key itself is read at start and never printed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tls_cert: Option<PathBuf>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tls_key: Option<PathBuf>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tls_client_ca: Option<PathBuf>,
 }
 
 #[derive(Debug, Error)]
@@ -273,6 +295,9 @@ impl Settings {
                     .map(|(n, p)| format!("{n}={}", p.display()))
                     .collect()
             },
+            tls_cert: cli.tls_cert.clone().or(file.tls_cert),
+            tls_key: cli.tls_key.clone().or(file.tls_key),
+            tls_client_ca: cli.tls_client_ca.clone().or(file.tls_client_ca),
         };
         settings.check()?;
         Ok(settings)
@@ -318,7 +343,47 @@ impl Settings {
                 message: "must be at least 1".into(),
             });
         }
+        match (&self.tls_cert, &self.tls_key) {
+            (Some(cert), None) => {
+                return Err(ConfigError::Invalid {
+                    field: "tls_key",
+                    message: format!(
+                        "--tls-cert {} is set but --tls-key is not: give both (or neither)",
+                        cert.display()
+                    ),
+                });
+            }
+            (None, Some(key)) => {
+                return Err(ConfigError::Invalid {
+                    field: "tls_cert",
+                    message: format!(
+                        "--tls-key {} is set but --tls-cert is not: give both (or neither)",
+                        key.display()
+                    ),
+                });
+            }
+            _ => {}
+        }
+        if let (Some(ca), None) = (&self.tls_client_ca, &self.tls_cert) {
+            return Err(ConfigError::Invalid {
+                field: "tls_client_ca",
+                message: format!(
+                    "--tls-client-ca {} needs TLS: give --tls-cert and --tls-key too",
+                    ca.display()
+                ),
+            });
+        }
         Ok(())
+    }
+
+    /// The TLS files, when TLS is on (both certificate and key given; [`Settings::resolve`]
+    /// refuses one without the other).
+    pub fn tls_files(&self) -> Option<TlsFiles> {
+        Some(TlsFiles {
+            cert: self.tls_cert.clone()?,
+            key: self.tls_key.clone()?,
+            client_ca: self.tls_client_ca.clone(),
+        })
     }
 
     /// The hands to load at start.
@@ -471,6 +536,48 @@ mod tests {
         );
         assert!(!format!("{s:?}").contains("flag-token"));
         assert!(Settings::resolve(&cli(&["--auth-token", "a b"])).is_err());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn tls_files_come_in_pairs_and_print_as_paths() {
+        assert_eq!(Settings::resolve(&cli(&[])).unwrap().tls_files(), None);
+        let s = Settings::resolve(&cli(&[
+            "--tls-cert",
+            "/etc/graspd/cert.pem",
+            "--tls-key",
+            "/etc/graspd/key.pem",
+        ]))
+        .unwrap();
+        let files = s.tls_files().unwrap();
+        assert_eq!(files.key, PathBuf::from("/etc/graspd/key.pem"));
+        assert_eq!(files.client_ca, None);
+        let printed = toml::to_string(&s).unwrap();
+        assert!(
+            printed.contains("tls_key = \"/etc/graspd/key.pem\""),
+            "{printed}"
+        );
+        for lonely in [
+            &["--tls-cert", "c.pem"][..],
+            &["--tls-key", "k.pem"],
+            &["--tls-client-ca", "ca.pem"],
+        ] {
+            let e = Settings::resolve(&cli(lonely)).unwrap_err().to_string();
+            assert!(e.contains(lonely[0]) && e.contains(lonely[1]), "{e}");
+        }
+        let dir = std::env::temp_dir().join(format!("graspd-tls-config-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let config = dir.join("graspd.toml");
+        std::fs::write(
+            &config,
+            "tls_cert = \"c.pem\"\ntls_key = \"k.pem\"\ntls_client_ca = \"ca.pem\"\n",
+        )
+        .unwrap();
+        let s = Settings::resolve(&cli(&["--config", config.to_str().unwrap()])).unwrap();
+        assert_eq!(
+            s.tls_files().unwrap().client_ca,
+            Some(PathBuf::from("ca.pem"))
+        );
         std::fs::remove_dir_all(&dir).ok();
     }
 

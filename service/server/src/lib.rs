@@ -11,6 +11,7 @@ pub mod rest;
 pub mod runner;
 pub mod server;
 pub mod telemetry;
+pub mod tls;
 
 pub use facade::{
     GraspService, HandChoice, ImageHints, Limits, OutputOptions, PlanRequest, PlanSource,

@@ -5,6 +5,7 @@ use crate::config::Settings;
 use crate::facade::GraspService;
 use crate::ops::{Ops, ReadyState};
 use crate::runner::PlanRunner;
+use crate::tls::{Tls, TlsError};
 use crate::{grpc, rest};
 use graspd_core::perception::{GraspTypeModel, init_onnx_runtime};
 use std::future::Future;
@@ -37,6 +38,8 @@ pub enum ServeError {
     Hands(String),
     #[error("cannot load the grasp-type model: {0}")]
     Model(String),
+    #[error("TLS: {0}")]
+    Tls(#[from] TlsError),
     #[error("server task failed: {0}")]
     Task(#[from] tokio::task::JoinError),
 }
@@ -74,6 +77,8 @@ pub async fn run(
             service.with_grasp_type_model(Arc::new(model))
         }
     };
+    // TLS files next: one that cannot be read, or a key that does not match, fails the start.
+    let tls = settings.tls_files().map(|f| Tls::load(&f)).transpose()?;
     let grpc_listener = bind("gRPC", settings.grpc_addr).await?;
     let rest_listener = bind("REST", settings.rest_addr).await?;
     let grpc_addr = grpc_listener.local_addr().map_err(ServeError::Announce)?;
@@ -90,12 +95,14 @@ pub async fn run(
     ops.readiness.set(ReadyState::Ready);
     let mut grpc_task = tokio::spawn(grpc::serve(
         grpc_listener,
+        tls.as_ref().map(|t| t.grpc.clone()),
         runner.clone(),
         ops.clone(),
         wait(stopped.clone()),
     ));
     let mut rest_task = tokio::spawn(rest::serve(
         rest_listener,
+        tls.as_ref().map(|t| t.rest.clone()),
         runner,
         ops.clone(),
         wait(stopped),
@@ -116,6 +123,8 @@ pub async fn run(
         max_queued_plans = settings.max_queued_plans,
         auth_tokens = settings.auth_tokens.len(),
         max_tactile_sessions = settings.max_tactile_sessions,
+        tls = tls.is_some(),
+        mutual_tls = tls.as_ref().is_some_and(|t| t.mutual),
         "graspd listening"
     );
 

@@ -14,7 +14,7 @@ use std::borrow::Cow;
 use std::future::Future;
 use tokio::net::TcpListener;
 use tokio_stream::wrappers::TcpListenerStream;
-use tonic::transport::Server;
+use tonic::transport::{Server, ServerTlsConfig};
 use tonic_health::ServingStatus;
 
 /// The methods served, as the metrics label them; any other path is labelled `other`.
@@ -66,11 +66,12 @@ async fn mirror_readiness(reporter: &tonic_health::server::HealthReporter, state
     }
 }
 
-/// Serves GraspPlanner, TactileStabilizer, health and reflection on `listener` until `shutdown`
-/// completes, then drains in-flight calls. The health service follows the readiness: SERVING
+/// Serves GraspPlanner, TactileStabilizer, health and reflection on `listener` (over TLS with
+/// `tls`) until `shutdown` completes, then drains in-flight calls. The health service follows the readiness: SERVING
 /// while ready, NOT_SERVING while draining.
 pub async fn serve(
     listener: TcpListener,
+    tls: Option<ServerTlsConfig>,
     runner: PlanRunner,
     ops: Ops,
     shutdown: impl Future<Output = ()> + Send,
@@ -96,7 +97,11 @@ pub async fn serve(
         .register_encoded_file_descriptor_set(graspd_proto::FILE_DESCRIPTOR_SET)
         .build_v1()
         .expect("the embedded descriptor set is valid");
-    Server::builder()
+    let mut builder = Server::builder();
+    if let Some(tls) = tls {
+        builder = builder.tls_config(tls)?;
+    }
+    builder
         .layer(EdgeLayer::new(EDGE_HOOKS, &ops))
         .layer(tower::util::MapResponseLayer::new(move |r| {
             status::rewrite_too_large(r, limit)

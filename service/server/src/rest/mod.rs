@@ -11,6 +11,7 @@ pub mod tactile;
 use crate::ops::edge::{EdgeHooks, EdgeLayer};
 use crate::ops::{Ops, Transport, metrics};
 use crate::runner::PlanRunner;
+use crate::tls::TlsListener;
 use axum::extract::{DefaultBodyLimit, FromRef, MatchedPath, State};
 use axum::http::header::CONTENT_TYPE;
 use axum::http::{HeaderMap, Method, StatusCode, Uri};
@@ -21,8 +22,10 @@ use error::ApiError;
 use serde_json::{Value, json};
 use std::borrow::Cow;
 use std::future::Future;
+use std::sync::Arc;
 use std::time::Duration;
 use tokio::net::TcpListener;
+use tokio_rustls::rustls::ServerConfig;
 
 /// The optional request header giving the caller's time budget, milliseconds.
 pub const REQUEST_TIMEOUT_HEADER: &str = "x-request-timeout-ms";
@@ -60,15 +63,27 @@ pub fn router(runner: PlanRunner, ops: Ops) -> Router {
 }
 
 /// Serves the routes on `listener` until `shutdown` completes, then drains open requests.
+/// With `tls`, serves HTTPS (handshakes in [`TlsListener`]); WebSocket upgrades work the same.
 pub async fn serve(
     listener: TcpListener,
+    tls: Option<Arc<ServerConfig>>,
     runner: PlanRunner,
     ops: Ops,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
-    axum::serve(listener, router(runner, ops))
-        .with_graceful_shutdown(shutdown)
-        .await
+    let app = router(runner, ops);
+    match tls {
+        None => {
+            axum::serve(listener, app)
+                .with_graceful_shutdown(shutdown)
+                .await
+        }
+        Some(config) => {
+            axum::serve(TlsListener::new(listener, config)?, app)
+                .with_graceful_shutdown(shutdown)
+                .await
+        }
+    }
 }
 
 /// Paths answered without a token: the probes and the metrics.
