@@ -478,7 +478,7 @@ async fn bearer_tokens_guard_both_transports_and_leave_the_probes_open() {
         .await
         .unwrap();
     assert_eq!(response.status(), 200);
-    for path in ["/healthz", "/readyz", "/metrics"] {
+    for path in ["/healthz", "/readyz", "/metrics", "/openapi.json"] {
         let response = http().get(server.rest_url(path)).send().await.unwrap();
         assert_eq!(response.status(), 200, "{path} without a token");
     }

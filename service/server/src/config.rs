@@ -44,7 +44,7 @@ pub struct Cli {
     pub max_queued_plans: Option<usize>,
     /// A bearer token that gRPC and REST requests must carry (`authorization: Bearer TOKEN`);
     /// repeatable (environment: comma-separated). Replaces the config file's `auth_tokens`.
-    /// Without any token, authentication is off. Probes and /metrics stay open.
+    /// Without any token, authentication is off. Probes, /metrics and /openapi.json stay open.
     #[arg(
         long = "auth-token",
         env = "GRASPD_AUTH_TOKENS",

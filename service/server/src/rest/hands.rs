@@ -1,7 +1,8 @@
 //! `/v1/hands`: the hand catalog, and registering hands from their robot descriptions.
 
 use super::error::ApiError;
-use super::json::{self, HandJson, HandsJson, RegisterHandJson, RegisteredHandJson};
+use super::json::{self, ErrorJson, HandJson, HandsJson, RegisterHandJson, RegisteredHandJson};
+use super::openapi::HandUploadForm;
 use super::plan::body_error;
 use crate::facade::Limits;
 use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
@@ -13,12 +14,34 @@ use axum::http::StatusCode;
 use axum::http::header::CONTENT_TYPE;
 use graspd_core::FieldError;
 
+#[utoipa::path(
+    get,
+    path = "/v1/hands",
+    tag = "hands",
+    summary = "The hand catalog",
+    responses(
+        (status = 200, description = "Every hand", body = HandsJson),
+        (status = 401, description = "Missing or wrong bearer token (only when tokens are configured)", body = ErrorJson),
+    )
+)]
 pub async fn list(State(runner): State<PlanRunner>) -> Json<HandsJson> {
     Json(HandsJson {
         hands: runner.service().list_hands(),
     })
 }
 
+#[utoipa::path(
+    get,
+    path = "/v1/hands/{name}",
+    tag = "hands",
+    summary = "One hand and the grasp types it realises",
+    params(("name" = String, Path, description = "The hand's name")),
+    responses(
+        (status = 200, description = "The hand", body = HandJson),
+        (status = 401, description = "Missing or wrong bearer token (only when tokens are configured)", body = ErrorJson),
+        (status = 404, description = "No hand of that name", body = ErrorJson),
+    )
+)]
 pub async fn get(
     State(runner): State<PlanRunner>,
     Path(name): Path<String>,
@@ -34,6 +57,27 @@ pub async fn get(
 /// (`curl -F "asset=@meshes/palm.stl;filename=meshes/palm.stl"`), a text part `name`, and
 /// optional text parts `format`, `palm`, `thumb`, `fingertips` (comma-separated) and `replace`
 /// (`true`). Answers 201 with the derived description.
+#[utoipa::path(
+    post,
+    path = "/v1/hands",
+    tag = "hands",
+    summary = "Register a hand from its MJCF or URDF document",
+    description = "JSON (RegisterHandJson, files in base64) or multipart/form-data (a `model` file part, one `asset` file part per mesh or included file named by its relative path, text parts `name`, `format`, `palm`, `thumb`, `fingertips`, `replace`). See the README's \"Hands from MJCF/URDF\" section.",
+    params(("x-request-timeout-ms" = Option<u64>, Header, description = "The caller's time budget, whole milliseconds, at least 1; 504 when it passes")),
+    request_body(content(
+        (RegisterHandJson = "application/json"),
+        (HandUploadForm = "multipart/form-data"),
+    )),
+    responses(
+        (status = 201, description = "Registered: the derived description", body = RegisteredHandJson),
+        (status = 400, description = "Bad input, naming the field", body = ErrorJson),
+        (status = 401, description = "Missing or wrong bearer token (only when tokens are configured)", body = ErrorJson),
+        (status = 409, description = "A hand of that name exists (send replace)", body = ErrorJson),
+        (status = 413, description = "The body exceeds max_message_bytes", body = ErrorJson),
+        (status = 415, description = "Neither JSON nor multipart", body = ErrorJson),
+        (status = 504, description = "The x-request-timeout-ms deadline passed", body = ErrorJson),
+    )
+)]
 pub async fn register(
     State(runner): State<PlanRunner>,
     request: Request,

@@ -4,6 +4,12 @@
 //! is, and the DTOs here cover what differs: clouds (arrays or base64), positions as
 //! `{x, y, z}` (accepted as `[x, y, z]` too), poses and the response layout.
 
+use super::openapi::{
+    CollisionReportDoc, DetectorDoc, ElectrodePolarityDoc, FrameResultDoc, GraspTypeDoc,
+    HandDescriptionDoc, HandPartDoc, LayoutDoc, PerceptionTimingsDoc, PidGainsDoc, PlaneSourceDoc,
+    PlannerModeDoc, PlannerOptionsDoc, QualityDoc, StageStatsDoc, TargetChoiceDoc, TimingsDoc,
+    TypeSourceDoc, Vec3InputDoc, Vec3ListDoc,
+};
 use crate::facade::RegisteredHand;
 use crate::facade::{
     HandChoice, ImageHints, LayoutChoice, Limits, OutputOptions, PlanRequest, PlanSource,
@@ -30,6 +36,7 @@ use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
 use serde::de::{self, DeserializeOwned, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
 use std::fmt;
+use utoipa::{IntoParams, ToSchema};
 
 // ---------------------------------------------------------------------------------------------
 // Parsing with field paths
@@ -75,7 +82,7 @@ pub fn parse<T: DeserializeOwned>(bytes: &[u8], root: &str) -> Result<T, FieldEr
 // Value types
 
 /// A 3-D point or vector: written as `{x, y, z}`, read from that or from `[x, y, z]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, ToSchema)]
 pub struct Vec3Json {
     pub x: f64,
     pub y: f64,
@@ -161,7 +168,7 @@ impl<'de> Deserialize<'de> for Vec3Json {
 }
 
 /// A rotation as a unit quaternion (x, y, z, w).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct QuaternionJson {
     pub x: f64,
     pub y: f64,
@@ -169,8 +176,9 @@ pub struct QuaternionJson {
     pub w: f64,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct PoseJson {
+    #[schema(value_type = Vec3InputDoc)]
     pub position: Vec3Json,
     pub orientation: QuaternionJson,
 }
@@ -191,9 +199,10 @@ impl From<&Pose> for PoseJson {
 }
 
 /// The plane n·x + offset = 0.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PlaneJson {
+    #[schema(value_type = Vec3InputDoc)]
     pub normal: Vec3Json,
     pub offset: f64,
 }
@@ -243,29 +252,35 @@ impl<'de> Deserialize<'de> for Vec3List {
     }
 }
 
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CloudJson {
+    #[schema(value_type = Vec3ListDoc)]
     pub points: Vec3List,
     #[serde(default)]
+    #[schema(value_type = Option<Vec3ListDoc>)]
     pub normals: Option<Vec3List>,
     /// Echoed by nobody yet; accepted for parity with the proto.
     #[serde(default)]
     pub frame_id: String,
 }
 
-#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct HintsJson {
     #[serde(default)]
+    #[schema(value_type = Option<GraspTypeDoc>)]
     pub grasp_type: Option<GraspType>,
     #[serde(default)]
+    #[schema(value_type = Option<Vec3InputDoc>)]
     pub attention_point: Option<Vec3Json>,
     #[serde(default)]
     pub support_plane: Option<PlaneJson>,
     #[serde(default)]
+    #[schema(value_type = Option<Vec3InputDoc>)]
     pub viewpoint: Option<Vec3Json>,
     #[serde(default)]
+    #[schema(value_type = Option<Vec3InputDoc>)]
     pub up: Option<Vec3Json>,
     /// Image hints (RGB-D input only).
     #[serde(default)]
@@ -278,7 +293,7 @@ pub struct HintsJson {
 
 /// `POST /v1/plan`: the PlanGraspRequest in JSON. In a multipart upload the `request` part has
 /// the same shape without `cloud`.
-#[derive(Debug, Clone, Default, Deserialize)]
+#[derive(Debug, Clone, Default, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PlanRequestJson {
     #[serde(default)]
@@ -289,8 +304,10 @@ pub struct PlanRequestJson {
     #[serde(default)]
     pub hand_name: Option<String>,
     #[serde(default)]
+    #[schema(value_type = Option<HandDescriptionDoc>)]
     pub hand_description: Option<Box<HandDescription>>,
     #[serde(default)]
+    #[schema(value_type = Option<PlannerOptionsDoc>)]
     pub options: Option<PlannerOptions>,
     #[serde(default)]
     pub hints: Option<HintsJson>,
@@ -299,7 +316,7 @@ pub struct PlanRequestJson {
 }
 
 /// A box in image pixels, [u_min, u_max) × [v_min, v_max).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RegionJson {
     pub u_min: u32,
@@ -309,7 +326,7 @@ pub struct RegionJson {
 }
 
 /// What to return besides the plan.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct OutputJson {
     #[serde(default)]
@@ -319,7 +336,7 @@ pub struct OutputJson {
 }
 
 /// One image of an RGB-D frame: `data` base64 (absent when a multipart part carries it).
-#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ImageJson {
     #[serde(default)]
@@ -336,7 +353,7 @@ pub struct ImageJson {
     pub data: Option<String>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct IntrinsicsJson {
     pub fx: f64,
@@ -346,7 +363,7 @@ pub struct IntrinsicsJson {
 }
 
 /// The RgbdFrame in JSON.
-#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RgbdJson {
     #[serde(default)]
@@ -603,14 +620,14 @@ pub fn plan_request_from_json(
 // ---------------------------------------------------------------------------------------------
 // Response
 
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PixelJson {
     pub u: u32,
     pub v: u32,
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct AttentionJson {
     pub position: Vec3Json,
     pub normal: Vec3Json,
@@ -618,19 +635,24 @@ pub struct AttentionJson {
     pub pixel: Option<PixelJson>,
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct OppositionJson {
+    #[schema(value_type = HandPartDoc)]
     pub h1: HandPart,
+    #[schema(value_type = HandPartDoc)]
     pub h2: HandPart,
+    #[schema(value_type = Vec<Vec3Json>, min_items = 2, max_items = 2)]
     pub points: [Vec3Json; 2],
+    #[schema(value_type = Vec<Vec3Json>, min_items = 2, max_items = 2)]
     pub normals: [Vec3Json; 2],
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct ContactJson {
     pub position: Vec3Json,
     pub normal: Vec3Json,
     pub finger: String,
+    #[schema(value_type = HandPartDoc)]
     pub part: HandPart,
     pub point_index: usize,
     /// IK residual (m) for a hand with known kinematics; absent otherwise.
@@ -638,20 +660,24 @@ pub struct ContactJson {
     pub ik_residual: Option<f64>,
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct JointJson {
     pub name: String,
     pub angle: f64,
 }
 
 /// The PlanGraspResponse in JSON.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct PlanResponseJson {
     pub hand: String,
+    #[schema(value_type = GraspTypeDoc)]
     pub grasp_type: GraspType,
+    #[schema(value_type = GraspTypeDoc)]
     pub requested_type: GraspType,
+    #[schema(value_type = TypeSourceDoc)]
     pub type_source: TypeSource,
     /// In the order large_wrap, small_wrap, power, pinch, precision, tripod.
+    #[schema(value_type = Vec<f64>, min_items = 6, max_items = 6)]
     pub type_probabilities: [f64; 6],
     pub attention: AttentionJson,
     pub opposition: OppositionJson,
@@ -659,16 +685,23 @@ pub struct PlanResponseJson {
     pub hand_pose: PoseJson,
     pub pregrasp_pose: PoseJson,
     pub joints: Vec<JointJson>,
+    #[schema(value_type = QualityDoc)]
     pub quality: Quality,
     pub feasible: bool,
     pub infeasible_reason: Option<String>,
+    #[schema(value_type = StageStatsDoc)]
     pub stage1: StageStats,
+    #[schema(value_type = StageStatsDoc)]
     pub stage2: StageStats,
+    #[schema(value_type = TimingsDoc)]
     pub timings: Timings,
+    #[schema(value_type = CollisionReportDoc)]
     pub collision: CollisionReport,
     pub support_plane: Option<PlaneJson>,
+    #[schema(value_type = PlaneSourceDoc)]
     pub plane_source: PlaneSource,
     pub points_used: usize,
+    #[schema(value_type = PlannerModeDoc)]
     pub mode: PlannerMode,
     pub seed: u64,
     pub warnings: Vec<String>,
@@ -679,7 +712,7 @@ pub struct PlanResponseJson {
 
 /// The grasp-type model's maps: `values` is base64 of 6 × height × width little-endian float32
 /// (type-major in the order s = 1..6, row-major), as in the proto.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct ProbabilityMapsJson {
     pub width: usize,
     pub height: usize,
@@ -687,15 +720,17 @@ pub struct ProbabilityMapsJson {
 }
 
 /// The Perception message in JSON.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct PerceptionJson {
     pub width: usize,
     pub height: usize,
     pub roi: RegionJson,
     pub roi_pixels: usize,
+    #[schema(value_type = TargetChoiceDoc)]
     pub target_source: TargetChoice,
     pub objects: usize,
     pub object_points: usize,
+    #[schema(value_type = PerceptionTimingsDoc)]
     pub timings: PerceptionTimings,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub probability_maps: Option<ProbabilityMapsJson>,
@@ -813,7 +848,7 @@ pub enum LayoutJson {
 
 /// Taring, as in the proto's TareSettings: default the mean of the first 50 frames, falling
 /// electrodes; `pretared: true` for already tared data (electrodes rising unless given).
-#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TareJson {
     #[serde(default)]
@@ -821,13 +856,15 @@ pub struct TareJson {
     #[serde(default)]
     pub pretared: bool,
     #[serde(default)]
+    #[schema(value_type = Option<ElectrodePolarityDoc>)]
     pub electrode_polarity: Option<ElectrodePolarity>,
 }
 
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TactileFingerJson {
     pub name: String,
+    #[schema(value_type = LayoutDoc)]
     pub layout: LayoutJson,
     #[serde(default)]
     pub tare: Option<TareJson>,
@@ -843,7 +880,7 @@ pub enum DetectorJson {
 
 /// The session-opening message (the proto's TactileSession in JSON); unset fields take the
 /// defaults.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TactileSessionJson {
     pub fingers: Vec<TactileFingerJson>,
@@ -863,24 +900,26 @@ pub struct TactileSessionJson {
     pub f_max: Option<f64>,
     /// Unset gains keep their defaults.
     #[serde(default)]
+    #[schema(value_type = Option<PidGainsDoc>)]
     pub pid: Option<PidGains>,
     #[serde(default)]
     pub alpha: Option<f64>,
     #[serde(default)]
     pub calibration_gain: Option<f64>,
     #[serde(default)]
+    #[schema(value_type = Option<DetectorDoc>)]
     pub detector: Option<DetectorJson>,
 }
 
 /// pac as one number or the driver's samples.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, ToSchema)]
 #[serde(untagged)]
 pub enum PacJson {
     One(f64),
     Samples(Vec<f64>),
 }
 
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FingerReadingJson {
     pub pdc: f64,
@@ -890,7 +929,7 @@ pub struct FingerReadingJson {
     pub electrodes: Vec<f64>,
 }
 
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TactileFrameJson {
     pub timestamp: f64,
@@ -898,7 +937,7 @@ pub struct TactileFrameJson {
 }
 
 /// `POST /v1/tactile/analyze` with a JSON body.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct AnalyzeRequestJson {
     pub session: TactileSessionJson,
@@ -906,8 +945,9 @@ pub struct AnalyzeRequestJson {
 }
 
 /// `POST /v1/tactile/analyze` with a CSV body: the session of one finger as query parameters.
-#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, IntoParams)]
 #[serde(deny_unknown_fields)]
+#[into_params(parameter_in = Query)]
 pub struct AnalyzeCsvQuery {
     /// Finger name [finger].
     #[serde(default)]
@@ -920,6 +960,7 @@ pub struct AnalyzeCsvQuery {
     #[serde(default)]
     pub baseline_frames: Option<usize>,
     #[serde(default)]
+    #[param(value_type = Option<ElectrodePolarityDoc>)]
     pub electrode_polarity: Option<ElectrodePolarity>,
     #[serde(default)]
     pub window_length: Option<usize>,
@@ -1066,15 +1107,16 @@ pub fn tactile_frame_from_json(f: TactileFrameJson) -> Frame {
 /// The answer of `POST /v1/tactile/analyze`: one result per frame, in the domain's serde form
 /// (the fields of the proto's StabilizationSetpoint / FingerSetpoint; enums as snake_case names,
 /// probabilities and locations as arrays, absent values as null).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, ToSchema)]
 pub struct AnalyzeResponseJson {
     pub frame_count: usize,
+    #[schema(value_type = Vec<FrameResultDoc>)]
     pub frames: Vec<FrameResult>,
 }
 
 /// One message of the `GET /v1/stabilize` WebSocket (the proto's StabilizeRequest in JSON):
 /// `{"session": {…}}` first, then `{"frame": {…}}`.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct StabilizeMessageJson {
     #[serde(default)]
@@ -1093,15 +1135,18 @@ pub struct SetpointJson {
 }
 
 /// `GET /v1/hands`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, ToSchema)]
 pub struct HandsJson {
+    #[schema(value_type = Vec<HandDescriptionDoc>)]
     pub hands: Vec<HandDescription>,
 }
 
 /// `GET /v1/hands/{name}`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, ToSchema)]
 pub struct HandJson {
+    #[schema(value_type = HandDescriptionDoc)]
     pub hand: HandDescription,
+    #[schema(value_type = Vec<GraspTypeDoc>)]
     pub realisable_types: Vec<GraspType>,
 }
 
@@ -1115,12 +1160,12 @@ impl From<HandDescription> for HandJson {
 }
 
 /// The error body of every non-2xx answer.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, ToSchema)]
 pub struct ErrorJson {
     pub error: ErrorDetailJson,
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, ToSchema)]
 pub struct ErrorDetailJson {
     /// invalid_argument, not_found, payload_too_large, resource_exhausted, unimplemented,
     /// unsupported_media_type, websocket_required, internal.
@@ -1181,7 +1226,7 @@ mod tests {
 // Hand registration
 
 /// One uploaded file of `POST /v1/hands` in JSON: its relative path and its bytes in base64.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct HandAssetJson {
     pub path: String,
@@ -1190,7 +1235,7 @@ pub struct HandAssetJson {
 }
 
 /// The robot description of `POST /v1/hands` (proto `HandModel`).
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct HandModelJson {
     /// "mjcf" or "urdf".
@@ -1210,7 +1255,7 @@ pub struct HandModelJson {
 }
 
 /// `POST /v1/hands` as JSON (proto `RegisterHandRequest`).
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RegisterHandJson {
     #[serde(default)]
@@ -1220,13 +1265,16 @@ pub struct RegisterHandJson {
     pub model: Option<HandModelJson>,
     /// Parametric descriptions are not registered (answered 400, naming `hand`).
     #[serde(default)]
+    #[schema(value_type = Option<Object>)]
     pub hand: Option<serde_json::Value>,
 }
 
 /// The answer of `POST /v1/hands` (201).
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, ToSchema)]
 pub struct RegisteredHandJson {
+    #[schema(value_type = HandDescriptionDoc)]
     pub hand: HandDescription,
+    #[schema(value_type = Vec<GraspTypeDoc>)]
     pub realisable_types: Vec<GraspType>,
     pub joints: Vec<String>,
     pub persisted: bool,

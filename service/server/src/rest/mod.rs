@@ -4,6 +4,7 @@
 pub mod error;
 pub mod hands;
 pub mod json;
+pub mod openapi;
 pub mod plan;
 pub mod stabilize;
 pub mod tactile;
@@ -56,6 +57,7 @@ pub fn router(runner: PlanRunner, ops: Ops) -> Router {
         .route("/healthz", get(health))
         .route("/readyz", get(ready))
         .route("/metrics", get(metrics_text))
+        .route("/openapi.json", get(openapi::openapi_json))
         .fallback(not_found)
         .layer(DefaultBodyLimit::max(limit))
         .layer(edge)
@@ -86,9 +88,9 @@ pub async fn serve(
     }
 }
 
-/// Paths answered without a token: the probes and the metrics.
+/// Paths answered without a token: the probes, the metrics and the OpenAPI document.
 fn open(path: &str) -> bool {
-    matches!(path, "/healthz" | "/readyz" | "/metrics")
+    matches!(path, "/healthz" | "/readyz" | "/metrics" | "/openapi.json")
 }
 
 /// `METHOD /route/{template}`; `unmatched` for the fallback.
@@ -138,12 +140,31 @@ pub const EDGE_HOOKS: EdgeHooks = EdgeHooks {
 };
 
 /// Liveness: the process answers.
+#[utoipa::path(
+    get,
+    path = "/healthz",
+    tag = "operations",
+    summary = "Liveness",
+    security(()),
+    responses((status = 200, description = "The process answers: {\"status\": \"ok\"}", body = Object))
+)]
 async fn health() -> Json<Value> {
     Json(json!({"status": "ok"}))
 }
 
 /// Readiness: 200 once the hands and models are loaded and both servers listen, 503 while
 /// starting or draining.
+#[utoipa::path(
+    get,
+    path = "/readyz",
+    tag = "operations",
+    summary = "Readiness",
+    security(()),
+    responses(
+        (status = 200, description = "Ready: {\"status\": \"ready\"}", body = Object),
+        (status = 503, description = "Starting or draining: {\"status\": \"starting\"|\"draining\"}", body = Object),
+    )
+)]
 async fn ready(State(state): State<AppState>) -> Response {
     let readiness = state.ops.readiness.state();
     let status = if state.ops.readiness.is_ready() {
@@ -155,6 +176,14 @@ async fn ready(State(state): State<AppState>) -> Response {
 }
 
 /// The Prometheus exposition (OpenMetrics text).
+#[utoipa::path(
+    get,
+    path = "/metrics",
+    tag = "operations",
+    summary = "Prometheus metrics",
+    security(()),
+    responses((status = 200, description = "The OpenMetrics text exposition (prefix graspd_; see the README's API section)", content_type = "application/openmetrics-text", body = String))
+)]
 async fn metrics_text(State(state): State<AppState>) -> Response {
     let text = state.ops.metrics.render(
         state.runner.service().tactile_sessions_open(),

@@ -6,7 +6,8 @@
 //! input only); `?format=json` is the default.
 
 use super::error::ApiError;
-use super::json::{self, PlanRequestJson, PlanResponseJson};
+use super::json::{self, ErrorJson, PlanRequestJson, PlanResponseJson};
+use super::openapi::PlanUpload;
 use crate::facade::{Limits, PlanRequest, PlanSource};
 use crate::ops::Transport;
 use crate::runner::PlanRunner;
@@ -30,6 +31,34 @@ pub struct PlanQuery {
     format: Option<String>,
 }
 
+#[utoipa::path(
+    post,
+    path = "/v1/plan",
+    tag = "plan",
+    summary = "Plan a grasp",
+    description = "A JSON body (PlanRequestJson: a cloud or an RGB-D frame, a hand, options, hints), or multipart/form-data with a `cloud` file part (PCD or PLY) or `color` and `depth` file parts (PNG/JPEG colour, 16-bit PNG depth), and a `request` JSON part. See the README's API and Perception sections.",
+    params(
+        ("format" = Option<String>, Query, description = "`json` (default): the plan as JSON; `png`: the overlay picture (RGB-D input only)"),
+        ("x-request-timeout-ms" = Option<u64>, Header, description = "The caller's time budget, whole milliseconds, at least 1; 504 when it passes"),
+    ),
+    request_body(content(
+        (PlanRequestJson = "application/json"),
+        (PlanUpload = "multipart/form-data"),
+    )),
+    responses(
+        (status = 200, description = "The plan (JSON), or with `format=png` the overlay picture", content(
+            (PlanResponseJson = "application/json"),
+            ("image/png"),
+        )),
+        (status = 400, description = "Bad input, naming the field", body = ErrorJson),
+        (status = 401, description = "Missing or wrong bearer token (only when tokens are configured)", body = ErrorJson),
+        (status = 404, description = "Unknown hand", body = ErrorJson),
+        (status = 413, description = "The body or cloud exceeds the configured limits", body = ErrorJson),
+        (status = 415, description = "Neither JSON nor multipart", body = ErrorJson),
+        (status = 503, description = "Overloaded or out of plan slots (Retry-After)", body = ErrorJson),
+        (status = 504, description = "The x-request-timeout-ms deadline passed", body = ErrorJson),
+    )
+)]
 pub async fn plan(
     State(runner): State<PlanRunner>,
     query: Result<Query<PlanQuery>, axum::extract::rejection::QueryRejection>,

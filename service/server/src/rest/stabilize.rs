@@ -22,6 +22,18 @@ use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use graspd_core::FieldError;
 
+#[utoipa::path(
+    get,
+    path = "/v1/stabilize",
+    tag = "tactile",
+    summary = "Tactile stabilization as a WebSocket",
+    description = "A WebSocket (`ws://…/v1/stabilize`) carrying the `Stabilize` stream in JSON text messages. Client → server: first `{\"session\": {…}}` (TactileSessionJson, as in /v1/tactile/analyze), then one `{\"frame\": {\"timestamp\", \"fingers\": [{\"pdc\", \"pac\", \"tdc\", \"tac\", \"electrodes\"}]}}` per reading (StabilizeMessageJson). Server → client: exactly one setpoint per frame, `{\"frame_index\", \"timestamp\", \"fingers\": [{…}]}` (the 0-based frame index and the fields of a FrameResult). An error — a bad session or frame, or max_tactile_sessions reached — is sent as the error body (ErrorJson), then the socket closes with 1008 (policy violation) or 1013 (try again later, the session limit). One message is handled at a time.",
+    responses(
+        (status = 101, description = "Switching protocols: the WebSocket is open"),
+        (status = 400, description = "Not a WebSocket upgrade (code websocket_required)", body = ErrorJson),
+        (status = 401, description = "Missing or wrong bearer token (only when tokens are configured)", body = ErrorJson),
+    )
+)]
 pub async fn stabilize(
     State(runner): State<PlanRunner>,
     ws: Result<WebSocketUpgrade, WebSocketUpgradeRejection>,

@@ -14,7 +14,8 @@
 //!   `session` (the full session; default one `biotac` finger with default taring).
 
 use super::error::ApiError;
-use super::json::{self, AnalyzeCsvQuery, AnalyzeRequestJson, AnalyzeResponseJson};
+use super::json::{self, AnalyzeCsvQuery, AnalyzeRequestJson, AnalyzeResponseJson, ErrorJson};
+use super::openapi::AnalyzeUpload;
 use super::plan::body_error;
 use crate::facade::{Limits, ServiceError, TactileSessionRequest};
 use crate::runner::PlanRunner;
@@ -26,6 +27,28 @@ use axum::http::header::CONTENT_TYPE;
 use graspd_core::FieldError;
 use graspd_core::tactile::{Frame, Recording};
 
+#[utoipa::path(
+    post,
+    path = "/v1/tactile/analyze",
+    tag = "tactile",
+    summary = "Run a whole tactile recording through a fresh stabilization session",
+    description = "`application/json` (AnalyzeRequestJson), `text/csv` (a `_bio.csv` recording of one finger, the session in the query parameters) or multipart/form-data (a `bio_csv` file part and an optional `session` JSON part). See the README's Tactile stabilization section.",
+    params(AnalyzeCsvQuery, ("x-request-timeout-ms" = Option<u64>, Header, description = "The caller's time budget, whole milliseconds, at least 1; 504 when it passes")),
+    request_body(content(
+        (AnalyzeRequestJson = "application/json"),
+        (String = "text/csv"),
+        (AnalyzeUpload = "multipart/form-data"),
+    )),
+    responses(
+        (status = 200, description = "One result per frame", body = AnalyzeResponseJson),
+        (status = 400, description = "Bad input, naming the field", body = ErrorJson),
+        (status = 401, description = "Missing or wrong bearer token (only when tokens are configured)", body = ErrorJson),
+        (status = 413, description = "The body exceeds max_message_bytes", body = ErrorJson),
+        (status = 415, description = "Not JSON, CSV or multipart", body = ErrorJson),
+        (status = 503, description = "max_tactile_sessions reached", body = ErrorJson),
+        (status = 504, description = "The x-request-timeout-ms deadline passed", body = ErrorJson),
+    )
+)]
 pub async fn analyze(
     State(runner): State<PlanRunner>,
     request: Request,
