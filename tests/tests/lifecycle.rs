@@ -75,3 +75,40 @@ fn flags_override_environment_override_the_config_file() {
     assert!(config.contains("grpc_addr = \"0.0.0.0:50051\""), "{config}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// SIGTERM while a plan is computing: the server stops taking connections, answers the plan in
+/// flight, then exits 0.
+#[tokio::test]
+async fn sigterm_drains_a_plan_in_flight() {
+    let server = Server::start();
+    // A 200,000-point cloud plans for seconds (debug build).
+    let body = serde_json::json!({
+        "cloud": {"points": graspd_e2e::base64(&graspd_e2e::packed(&graspd_e2e::cylinder(200_000)))},
+        "hand_name": "shadow",
+        "options": {"seed": 1},
+        "hints": {"support_plane": {"normal": [0.0, 0.0, 1.0], "offset": 0.0}},
+    });
+    let url = server.rest_url("/v1/plan");
+    let in_flight = tokio::spawn(async move { http().post(url).json(&body).send().await });
+    // Let the request reach the planner.
+    tokio::time::sleep(std::time::Duration::from_millis(300)).await;
+    assert!(
+        !in_flight.is_finished(),
+        "the plan finished before the signal: use a larger cloud"
+    );
+    let t = std::time::Instant::now();
+    let rest = server.rest_url("/healthz");
+    let exit = tokio::task::spawn_blocking(move || server.signal("TERM"));
+    let response = in_flight
+        .await
+        .unwrap()
+        .expect("the plan in flight is answered");
+    assert_eq!(response.status(), 200);
+    eprintln!("answered {:.2} s after SIGTERM", t.elapsed().as_secs_f64());
+    let plan: serde_json::Value = response.json().await.unwrap();
+    assert!(plan["contacts"].as_array().is_some_and(|c| !c.is_empty()));
+    let status = exit.await.unwrap();
+    assert!(status.success(), "{status:?}");
+    // After the drain nothing listens.
+    assert!(http().get(rest).send().await.is_err());
+}
