@@ -86,6 +86,7 @@ impl Server {
             "GRASPD_MAX_POINTS",
             "GRASPD_MAX_CONCURRENT_PLANS",
             "GRASPD_MAX_QUEUED_PLANS",
+            "GRASPD_DRAIN_DELAY_MS",
             "GRASPD_MAX_TACTILE_SESSIONS",
             "GRASPD_AUTH_TOKENS",
             "GRASPD_AUTH_TOKENS_FILE",

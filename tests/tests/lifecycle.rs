@@ -112,3 +112,35 @@ async fn sigterm_drains_a_plan_in_flight() {
     // After the drain nothing listens.
     assert!(http().get(rest).send().await.is_err());
 }
+
+/// `--drain-delay-ms`: after SIGTERM the server keeps serving for the delay with `/readyz` at
+/// 503 "draining" on new connections (so a load balancer takes it out), then exits 0.
+#[tokio::test]
+async fn a_drain_delay_keeps_serving_while_not_ready() {
+    let server = Server::start_with(&["--drain-delay-ms", "1500"]);
+    let ready = server.rest_url("/readyz");
+    let plan_url = server.rest_url("/v1/plan");
+    let pid = server.pid();
+    let t = std::time::Instant::now();
+    let exit = tokio::task::spawn_blocking(move || server.signal("TERM"));
+    tokio::time::sleep(std::time::Duration::from_millis(300)).await;
+    // A fresh client: a new connection.
+    let response = graspd_e2e::http().get(&ready).send().await.unwrap();
+    assert_eq!(response.status(), 503);
+    let body: serde_json::Value = response.json().await.unwrap();
+    assert_eq!(body["status"], "draining");
+    let plan = http()
+        .post(&plan_url)
+        .json(&graspd_e2e::json_request("parallel_gripper", 1))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(plan.status(), 200, "still planning during the delay");
+    let status = exit.await.unwrap();
+    assert!(status.success(), "{status:?}");
+    assert!(
+        t.elapsed() >= std::time::Duration::from_millis(1500),
+        "exited {:?} after the signal, before the delay (pid {pid})",
+        t.elapsed()
+    );
+}

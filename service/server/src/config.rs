@@ -42,6 +42,11 @@ pub struct Cli {
     /// a retry hint [default: 4 × max_concurrent_plans].
     #[arg(long, env = "GRASPD_MAX_QUEUED_PLANS", value_name = "N")]
     pub max_queued_plans: Option<usize>,
+    /// On SIGTERM, keep serving this long with /readyz at 503 and gRPC health NOT_SERVING
+    /// before the listeners close, so that a load balancer stops sending traffic first
+    /// [default: 0].
+    #[arg(long, env = "GRASPD_DRAIN_DELAY_MS", value_name = "MS")]
+    pub drain_delay_ms: Option<u64>,
     /// A bearer token that gRPC and REST requests must carry (`authorization: Bearer TOKEN`);
     /// repeatable (environment: comma-separated). Replaces the config file's `auth_tokens`.
     /// Without any token, authentication is off. Probes, /metrics and /openapi.json stay open.
@@ -123,6 +128,7 @@ pub struct FileConfig {
     pub max_points: Option<usize>,
     pub max_concurrent_plans: Option<usize>,
     pub max_queued_plans: Option<usize>,
+    pub drain_delay_ms: Option<u64>,
     pub max_tactile_sessions: Option<usize>,
     pub max_image_pixels: Option<usize>,
     /// Bearer tokens, as `--auth-token`.
@@ -152,6 +158,7 @@ pub struct Settings {
     pub max_points: usize,
     pub max_concurrent_plans: usize,
     pub max_queued_plans: usize,
+    pub drain_delay_ms: u64,
     pub max_tactile_sessions: usize,
     pub max_image_pixels: usize,
     /// Never printed: `--print-config` shows their count in a comment.
@@ -261,6 +268,7 @@ impl Settings {
                 .max_queued_plans
                 .or(file.max_queued_plans)
                 .unwrap_or(QUEUED_PLANS_PER_PLANNER.saturating_mul(max_concurrent_plans)),
+            drain_delay_ms: cli.drain_delay_ms.or(file.drain_delay_ms).unwrap_or(0),
             max_tactile_sessions: cli
                 .max_tactile_sessions
                 .or(file.max_tactile_sessions)
@@ -335,6 +343,15 @@ impl Settings {
             return Err(ConfigError::Invalid {
                 field: "model_threads",
                 message: format!("must be within 1..=64, got {}", self.model_threads),
+            });
+        }
+        if self.drain_delay_ms > 600_000 {
+            return Err(ConfigError::Invalid {
+                field: "drain_delay_ms",
+                message: format!(
+                    "must be at most 600000 (10 min), got {}",
+                    self.drain_delay_ms
+                ),
             });
         }
         if self.max_tactile_sessions == 0 {

@@ -141,6 +141,10 @@ pub async fn run(
     }
     tracing::info!("shutting down: draining in-flight requests");
     ops.readiness.set(ReadyState::Draining);
+    if settings.drain_delay_ms > 0 {
+        // Still serving, but not ready: load balancers take the instance out first.
+        tokio::time::sleep(Duration::from_millis(settings.drain_delay_ms)).await;
+    }
     let _ = stop.send(());
     let drained = tokio::time::timeout(DRAIN_TIMEOUT, async {
         if !grpc_task.is_finished() {
