@@ -438,7 +438,14 @@ async fn bad_frames_and_image_hints_get_field_named_errors() {
         ("/v1/plan", body, 400, "rgbd.depth.encoding"),
         ("/v1/plan", no_intrinsics, 400, "rgbd.intrinsics"),
         ("/v1/plan", not_base64, 400, "rgbd.color.data"),
-        ("/v1/plan?format=gif", json_request(r, pixel), 400, "format"),
+        // A small body: the query is refused before a large body is read, and a client still
+        // writing one would see EPIPE instead of the answer.
+        (
+            "/v1/plan?format=gif",
+            graspd_e2e::json_request("shadow", 0),
+            400,
+            "format",
+        ),
         (
             "/v1/plan?format=png",
             graspd_e2e::json_request("shadow", 0),
