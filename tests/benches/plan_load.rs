@@ -9,12 +9,11 @@
 //! cargo bench -p graspd-e2e --bench plan_load -- --requests 400 --concurrency 16
 //! ```
 
-use graspd_e2e::{Server, base64, packed, target_dir};
+use graspd_e2e::{Server, base64, bench_arg, packed, release_graspd};
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::grasp_planner_client::GraspPlannerClient;
 use graspd_testkit::{Object, standard_view};
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -27,14 +26,6 @@ struct Outcome {
     errors: BTreeMap<String, usize>,
     not_sent: usize,
     seconds: f64,
-}
-
-fn arg(name: &str) -> Option<usize> {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1))
-        .and_then(|v| v.parse().ok())
 }
 
 fn grpc_request(points: &[u8], i: usize) -> pb::PlanGraspRequest {
@@ -169,21 +160,12 @@ fn q(sorted: &[f64], p: f64) -> f64 {
 }
 
 fn main() {
-    let graspd = std::env::var_os("GRASPD_BIN")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| target_dir().join("release").join("graspd"));
-    if !graspd.is_file() {
-        eprintln!(
-            "{} not found: build it with `cargo build --release --bins` (or set GRASPD_BIN)",
-            graspd.display()
-        );
-        std::process::exit(2);
-    }
+    let graspd = release_graspd();
     let view = standard_view(Object::TomatoSoupCan, 2000, 1);
     let points = Arc::new(packed(&view.cloud.points));
     let points_b64 = Arc::new(base64(&points));
-    let requests = arg("--requests").unwrap_or(200);
-    let levels: Vec<usize> = match arg("--concurrency") {
+    let requests: usize = bench_arg("--requests").unwrap_or(200);
+    let levels: Vec<usize> = match bench_arg("--concurrency") {
         Some(c) => vec![c],
         None => vec![1, 2, 8, 32],
     };

@@ -17,11 +17,10 @@
 use graspd::facade::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
 use graspd::grpc::convert;
 use graspd_core::tactile::{Frame, Recording, StabilizerConfig, TareConfig};
-use graspd_e2e::{Server, target_dir};
+use graspd_e2e::{Server, bench_arg, release_graspd};
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::stabilize_request::Kind;
 use graspd_proto::v1::tactile_stabilizer_client::TactileStabilizerClient;
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::sync::mpsc;
@@ -192,25 +191,8 @@ fn quantile(sorted: &[f64], p: f64) -> f64 {
     sorted[((sorted.len() - 1) as f64 * p).round() as usize]
 }
 
-fn arg(name: &str) -> Option<f64> {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1))
-        .and_then(|v| v.parse().ok())
-}
-
 fn main() {
-    let graspd = std::env::var_os("GRASPD_BIN")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| target_dir().join("release").join("graspd"));
-    if !graspd.is_file() {
-        eprintln!(
-            "{} not found: build it with `cargo build --release --bins` (or set GRASPD_BIN)",
-            graspd.display()
-        );
-        std::process::exit(2);
-    }
+    let graspd = release_graspd();
     let path = graspd_testkit::testdata_dir().join(RECORDING);
     let text = match std::fs::read_to_string(&path) {
         Ok(t) => t,
@@ -224,10 +206,10 @@ fn main() {
             .expect("the recording parses")
             .frames(),
     );
-    let rate = arg("--rate").unwrap_or(1000.0);
-    let seconds = arg("--seconds").unwrap_or(10.0);
-    let counts: Vec<usize> = match arg("--sessions") {
-        Some(n) => vec![n as usize],
+    let rate: f64 = bench_arg("--rate").unwrap_or(1000.0);
+    let seconds: f64 = bench_arg("--seconds").unwrap_or(10.0);
+    let counts: Vec<usize> = match bench_arg::<usize>("--sessions") {
+        Some(n) => vec![n],
         None => vec![1, 5, 10, 25, 50],
     };
     let server = Server::start_binary(&graspd, &["--max-tactile-sessions", "256"]);

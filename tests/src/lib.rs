@@ -9,6 +9,7 @@ use base64::Engine;
 use graspd_core::cloud::encode_packed_xyz;
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::grasp_planner_client::GraspPlannerClient;
+use graspd_testkit::rgbd::RgbdRender;
 use nalgebra::Point3;
 use std::io::{BufRead, BufReader};
 use std::net::SocketAddr;
@@ -389,4 +390,71 @@ pub fn metric(text: &str, name: &str, labels: &[(&str, &str)]) -> Option<f64> {
         }
     }
     found
+}
+
+fn camera_pose(r: &RgbdRender) -> pb::Pose {
+    let t = r.camera_to_world.translation.vector;
+    let q = r.camera_to_world.rotation;
+    pb::Pose {
+        position: Some(pb::Vec3 {
+            x: t.x,
+            y: t.y,
+            z: t.z,
+        }),
+        orientation: Some(pb::Quaternion {
+            x: q.i,
+            y: q.j,
+            z: q.k,
+            w: q.w,
+        }),
+    }
+}
+
+/// A rendered frame as the gRPC message: raw rgb8 and 16UC1 (millimetres), with the camera pose
+/// when `with_pose` (outputs then in the world frame).
+pub fn rgbd_frame_proto(r: &RgbdRender, with_pose: bool) -> pb::RgbdFrame {
+    let image = |encoding: &str, data: Vec<u8>| pb::Image {
+        width: r.width as u32,
+        height: r.height as u32,
+        encoding: encoding.into(),
+        step: 0,
+        data,
+    };
+    pb::RgbdFrame {
+        color: Some(image("rgb8", r.rgb.clone())),
+        depth: Some(image("16UC1", r.depth_mm_le())),
+        intrinsics: Some(pb::CameraIntrinsics {
+            fx: r.intrinsics.fx,
+            fy: r.intrinsics.fy,
+            cx: r.intrinsics.cx,
+            cy: r.intrinsics.cy,
+        }),
+        depth_scale: 0.0,
+        camera_to_world: with_pose.then(|| camera_pose(r)),
+    }
+}
+
+/// A bench's `--name VALUE` argument, parsed.
+pub fn bench_arg<T: std::str::FromStr>(name: &str) -> Option<T> {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1))
+        .and_then(|v| v.parse().ok())
+}
+
+/// The release `graspd` the load benches drive (`GRASPD_BIN`, else `<target>/release/graspd`);
+/// exits with a hint when it has not been built.
+pub fn release_graspd() -> PathBuf {
+    let graspd = std::env::var_os("GRASPD_BIN")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| target_dir().join("release").join("graspd"));
+    if !graspd.is_file() {
+        eprintln!(
+            "{} not found: build it with `cargo build --release --bins` (or set GRASPD_BIN)",
+            graspd.display()
+        );
+        std::process::exit(2);
+    }
+    graspd
 }

@@ -2,7 +2,9 @@
 //! stages on both transports; request ids come back and name the request's log lines;
 //! readiness; bearer-token authentication on both transports with the probes left open.
 
-use graspd_e2e::{Server, binary, grpc_request, http, json_request, metric, rest_error};
+use graspd_e2e::{
+    Server, binary, grpc_request, http, json_request, metric, rest_error, rgbd_frame_proto,
+};
 use graspd_proto::v1 as pb;
 use graspd_testkit::Object;
 use graspd_testkit::rgbd::{RgbdScene, SceneObject};
@@ -23,26 +25,10 @@ fn rgbd_request() -> pb::PlanGraspRequest {
     )])
     .render()
     .unwrap();
-    let image = |encoding: &str, data: Vec<u8>| pb::Image {
-        width: r.width as u32,
-        height: r.height as u32,
-        encoding: encoding.into(),
-        step: 0,
-        data,
-    };
     pb::PlanGraspRequest {
-        input: Some(pb::plan_grasp_request::Input::Rgbd(pb::RgbdFrame {
-            color: Some(image("rgb8", r.rgb.clone())),
-            depth: Some(image("16UC1", r.depth_mm_le())),
-            intrinsics: Some(pb::CameraIntrinsics {
-                fx: r.intrinsics.fx,
-                fy: r.intrinsics.fy,
-                cx: r.intrinsics.cx,
-                cy: r.intrinsics.cy,
-            }),
-            depth_scale: 0.0,
-            camera_to_world: None,
-        })),
+        input: Some(pb::plan_grasp_request::Input::Rgbd(rgbd_frame_proto(
+            &r, false,
+        ))),
         hand: Some(pb::plan_grasp_request::Hand::HandName(
             "parallel_gripper".into(),
         )),

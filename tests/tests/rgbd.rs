@@ -9,11 +9,12 @@ use graspd::grpc::status::FIELD_METADATA_KEY;
 use graspd::rest::json::PlanResponseJson;
 use graspd_core::GraspPlan;
 use graspd_core::perception::TargetChoice;
-use graspd_e2e::{Server, assert_valid_plan_works, base64, binary, http, rest_error};
+use graspd_e2e::{
+    Server, assert_valid_plan_works, base64, binary, http, rest_error, rgbd_frame_proto,
+};
 use graspd_proto::v1 as pb;
 use graspd_testkit::Object;
 use graspd_testkit::rgbd::{RgbdRender, RgbdScene, SceneObject};
-use image::{ImageEncoder, codecs::png::PngEncoder};
 use serde_json::json;
 use std::process::Command;
 use std::sync::OnceLock;
@@ -34,46 +35,6 @@ fn scene() -> &'static RgbdRender {
         .render()
         .unwrap()
     })
-}
-
-fn camera_pose(r: &RgbdRender) -> pb::Pose {
-    let t = r.camera_to_world.translation.vector;
-    let q = r.camera_to_world.rotation;
-    pb::Pose {
-        position: Some(pb::Vec3 {
-            x: t.x,
-            y: t.y,
-            z: t.z,
-        }),
-        orientation: Some(pb::Quaternion {
-            x: q.i,
-            y: q.j,
-            z: q.k,
-            w: q.w,
-        }),
-    }
-}
-
-fn grpc_frame(r: &RgbdRender) -> pb::RgbdFrame {
-    let image = |encoding: &str, data: Vec<u8>| pb::Image {
-        width: r.width as u32,
-        height: r.height as u32,
-        encoding: encoding.into(),
-        step: 0,
-        data,
-    };
-    pb::RgbdFrame {
-        color: Some(image("rgb8", r.rgb.clone())),
-        depth: Some(image("16UC1", r.depth_mm_le())),
-        intrinsics: Some(pb::CameraIntrinsics {
-            fx: r.intrinsics.fx,
-            fy: r.intrinsics.fy,
-            cx: r.intrinsics.cx,
-            cy: r.intrinsics.cy,
-        }),
-        depth_scale: 0.0,
-        camera_to_world: Some(camera_pose(r)),
-    }
 }
 
 fn grpc_request(frame: pb::RgbdFrame, pixel: Option<(u32, u32)>) -> pb::PlanGraspRequest {
@@ -114,34 +75,6 @@ fn json_request(r: &RgbdRender, pixel: (u32, u32)) -> serde_json::Value {
         "options": {"seed": 5},
         "hints": {"attention_pixel": {"u": pixel.0, "v": pixel.1}},
     })
-}
-
-fn png_rgb(r: &RgbdRender) -> Vec<u8> {
-    let mut out = Vec::new();
-    PngEncoder::new(&mut out)
-        .write_image(
-            &r.rgb,
-            r.width as u32,
-            r.height as u32,
-            image::ExtendedColorType::Rgb8,
-        )
-        .unwrap();
-    out
-}
-
-fn png_depth(r: &RgbdRender) -> Vec<u8> {
-    // PNG stores 16-bit samples big-endian; the encoder takes them in native order.
-    let bytes: Vec<u8> = r.depth_mm().iter().flat_map(|d| d.to_ne_bytes()).collect();
-    let mut out = Vec::new();
-    PngEncoder::new(&mut out)
-        .write_image(
-            &bytes,
-            r.width as u32,
-            r.height as u32,
-            image::ExtendedColorType::L16,
-        )
-        .unwrap();
-    out
 }
 
 /// The checks every plan of the soup can must pass.
@@ -202,7 +135,7 @@ async fn an_rgbd_frame_plans_the_hinted_object_alike_over_grpc_and_rest() {
     let grpc = server
         .grpc()
         .await
-        .plan_grasp(grpc_request(grpc_frame(r), Some(pixel)))
+        .plan_grasp(grpc_request(rgbd_frame_proto(r, true), Some(pixel)))
         .await
         .unwrap()
         .into_inner();
@@ -238,7 +171,7 @@ async fn an_rgbd_frame_plans_the_hinted_object_alike_over_grpc_and_rest() {
     let plan = server
         .grpc()
         .await
-        .plan_grasp(grpc_request(grpc_frame(r), None))
+        .plan_grasp(grpc_request(rgbd_frame_proto(r, true), None))
         .await
         .unwrap()
         .into_inner();
@@ -261,11 +194,11 @@ async fn multipart_pngs_give_the_overlay_with_format_png_and_graspctl_writes_it(
         reqwest::multipart::Form::new()
             .part(
                 "color",
-                reqwest::multipart::Part::bytes(png_rgb(r)).file_name("rgb.png"),
+                reqwest::multipart::Part::bytes(r.color_png()).file_name("rgb.png"),
             )
             .part(
                 "depth",
-                reqwest::multipart::Part::bytes(png_depth(r)).file_name("depth.png"),
+                reqwest::multipart::Part::bytes(r.depth_png()).file_name("depth.png"),
             )
             .text("request", request.to_string())
     };
@@ -305,8 +238,8 @@ async fn multipart_pngs_give_the_overlay_with_format_png_and_graspctl_writes_it(
         dir.join("depth.png"),
         dir.join("overlay.png"),
     );
-    std::fs::write(&rgb_path, png_rgb(r)).unwrap();
-    std::fs::write(&depth_path, png_depth(r)).unwrap();
+    std::fs::write(&rgb_path, r.color_png()).unwrap();
+    std::fs::write(&depth_path, r.depth_png()).unwrap();
     let k = r.intrinsics;
     let output = Command::new(binary("graspctl", "GRASPCTL_BIN"))
         .env_remove("GRASPD_SERVER")
@@ -338,7 +271,7 @@ async fn multipart_pngs_give_the_overlay_with_format_png_and_graspctl_writes_it(
 async fn bad_frames_and_image_hints_get_field_named_errors() {
     let server = Server::start_with(&["--max-image-pixels", "400000"]);
     let r = scene();
-    let good = grpc_frame(r);
+    let good = rgbd_frame_proto(r, true);
     let mut cases: Vec<(&str, pb::PlanGraspRequest, Code)> = Vec::new();
     let mut f = good.clone();
     f.depth.as_mut().unwrap().width = 320;
@@ -351,7 +284,7 @@ async fn bad_frames_and_image_hints_get_field_named_errors() {
         Code::InvalidArgument,
     ));
     let mut f = good.clone();
-    let png = png_rgb(r);
+    let png = r.color_png();
     let c = f.color.as_mut().unwrap();
     c.encoding = "png".into();
     c.data = png[..png.len() / 2].to_vec();
@@ -438,14 +371,9 @@ async fn bad_frames_and_image_hints_get_field_named_errors() {
         ("/v1/plan", body, 400, "rgbd.depth.encoding"),
         ("/v1/plan", no_intrinsics, 400, "rgbd.intrinsics"),
         ("/v1/plan", not_base64, 400, "rgbd.color.data"),
-        // A small body: the query is refused before a large body is read, and a client still
-        // writing one would see EPIPE instead of the answer.
-        (
-            "/v1/plan?format=gif",
-            graspd_e2e::json_request("shadow", 0),
-            400,
-            "format",
-        ),
+        // A bad query with a 1.6 MB body: the server reads the body before it answers, so the
+        // client gets the 400 rather than a broken pipe while still writing.
+        ("/v1/plan?format=gif", json_request(r, pixel), 400, "format"),
         (
             "/v1/plan?format=png",
             graspd_e2e::json_request("shadow", 0),
@@ -482,7 +410,7 @@ async fn bad_frames_and_image_hints_get_field_named_errors() {
     );
     let form = reqwest::multipart::Form::new().part(
         "color",
-        reqwest::multipart::Part::bytes(png_rgb(r)).file_name("rgb.png"),
+        reqwest::multipart::Part::bytes(r.color_png()).file_name("rgb.png"),
     );
     let response = http()
         .post(server.rest_url("/v1/plan"))
@@ -547,7 +475,7 @@ async fn a_grasp_type_model_decides_the_type_over_the_roi_and_places_the_attenti
         ),
         (1, (None, Some(1)), graspd_core::GraspType::Precision),
     ] {
-        let mut request = grpc_request(grpc_frame(r), hint.0);
+        let mut request = grpc_request(rgbd_frame_proto(r, true), hint.0);
         request.hand = Some(pb::plan_grasp_request::Hand::HandName("shadow".into()));
         if hint.1.is_some() {
             // A box around the bottle only.
@@ -604,7 +532,7 @@ async fn a_grasp_type_model_decides_the_type_over_the_roi_and_places_the_attenti
         assert!((corner(0) as f64 - sigmoid(-5.0)).abs() < 1e-6);
     }
     // A hand that realises neither: s* is its most probable realisable type.
-    let mut request = grpc_request(grpc_frame(r), Some(r.object_pixel(0)));
+    let mut request = grpc_request(rgbd_frame_proto(r, true), Some(r.object_pixel(0)));
     request.hand = Some(pb::plan_grasp_request::Hand::HandName(HAND.into()));
     let plan = plan_from_proto(
         server

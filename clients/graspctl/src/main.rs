@@ -11,9 +11,7 @@ use graspd::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
 use graspd_core::cloud::Plane;
 use graspd_core::cloud::io::read_cloud_file;
 use graspd_core::hand::parse_hand_toml;
-use graspd_core::perception::{
-    CameraIntrinsics, ColorEncoding, DepthEncoding, ImageData, RgbdFrame, declared_size, frame_size,
-};
+use graspd_core::perception::{CameraIntrinsics, RgbdFrame, WireImage};
 use graspd_core::planning::PlannerMode;
 use graspd_core::{FieldError, GraspType, PlanHints, PlannerOptions};
 use graspd_proto::v1 as pb;
@@ -236,15 +234,6 @@ async fn connect(server: &str, token: Option<&str>) -> Result<Planner, CliError>
     ))
 }
 
-/// The encoding of an image file by its magic bytes (the server checks it).
-fn file_encoding(data: &[u8]) -> &'static str {
-    if data.starts_with(&[0xFF, 0xD8]) {
-        "jpeg"
-    } else {
-        "png"
-    }
-}
-
 fn build_source(args: &PlanArgs) -> Result<PlanSource, CliError> {
     let (Some(rgb), Some(depth), Some([fx, fy, cx, cy])) =
         (&args.rgb, &args.depth, args.intrinsics)
@@ -256,35 +245,30 @@ fn build_source(args: &PlanArgs) -> Result<PlanSource, CliError> {
         })?;
         return Ok(PlanSource::Cloud(cloud));
     };
-    let (color, depth) = (read(rgb)?, read(depth)?);
-    let file = |path: &PathBuf, error| CliError::File {
-        path: path.clone(),
-        error,
+    // PNG / JPEG files: the encodings and sizes come from the files themselves.
+    let file = |path: &PathBuf| -> Result<WireImage, CliError> {
+        Ok(WireImage {
+            data: read(path)?,
+            ..WireImage::default()
+        })
     };
-    let color_encoding =
-        ColorEncoding::parse(file_encoding(&color), "color").map_err(|e| file(rgb, e))?;
-    let color_size = declared_size(0, 0, &color, true, "color").map_err(|e| file(rgb, e))?;
-    let depth_path = args.depth.as_ref().expect("checked above");
-    let depth_size = declared_size(0, 0, &depth, true, "depth").map_err(|e| file(depth_path, e))?;
-    let (width, height) =
-        frame_size(color_size, depth_size, "frame").map_err(|e| file(depth_path, e))?;
-    Ok(PlanSource::Rgbd(Box::new(RgbdFrame {
-        color: ImageData {
-            encoding: color_encoding,
-            data: color,
-            step: 0,
+    let frame = RgbdFrame::from_wire(
+        file(rgb)?,
+        file(depth)?,
+        CameraIntrinsics { fx, fy, cx, cy },
+        args.depth_scale,
+        None,
+        "frame",
+    )
+    .map_err(|error| CliError::File {
+        path: if error.field.starts_with("frame.color") {
+            rgb.clone()
+        } else {
+            depth.clone()
         },
-        depth: ImageData {
-            encoding: DepthEncoding::Png16,
-            data: depth,
-            step: 0,
-        },
-        width,
-        height,
-        intrinsics: CameraIntrinsics { fx, fy, cx, cy },
-        depth_scale: args.depth_scale,
-        camera_to_world: None,
-    })))
+        error,
+    })?;
+    Ok(PlanSource::Rgbd(Box::new(frame)))
 }
 
 /// A pixel coordinate given on the command line.

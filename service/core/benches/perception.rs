@@ -20,7 +20,6 @@ use graspd_core::perception::{
 use graspd_core::{HandCatalog, PlanHints, PlanInput, PlannerOptions, plan};
 use graspd_testkit::Object;
 use graspd_testkit::rgbd::{RgbdRender, RgbdScene, SceneObject};
-use image::{ImageEncoder, codecs::png::PngEncoder};
 use std::hint::black_box;
 
 fn frame(r: &RgbdRender) -> RgbdFrame {
@@ -48,14 +47,6 @@ fn frame(r: &RgbdRender) -> RgbdFrame {
     }
 }
 
-fn png(data: &[u8], w: usize, h: usize, ty: image::ExtendedColorType) -> Vec<u8> {
-    let mut out = Vec::new();
-    PngEncoder::new(&mut out)
-        .write_image(data, w as u32, h as u32, ty)
-        .unwrap();
-    out
-}
-
 fn bench_perception(c: &mut Criterion) {
     let r = RgbdScene::on_table(vec![
         SceneObject::new(Object::TomatoSoupCan, 0.0, -0.09, [200, 40, 30]),
@@ -67,13 +58,12 @@ fn bench_perception(c: &mut Criterion) {
     let mut png_frame = raw.clone();
     png_frame.color = ImageData {
         encoding: ColorEncoding::Png,
-        data: png(&r.rgb, r.width, r.height, image::ExtendedColorType::Rgb8),
+        data: r.color_png(),
         step: 0,
     };
-    let mm: Vec<u8> = r.depth_mm().iter().flat_map(|d| d.to_ne_bytes()).collect();
     png_frame.depth = ImageData {
         encoding: DepthEncoding::Png16,
-        data: png(&mm, r.width, r.height, image::ExtendedColorType::L16),
+        data: r.depth_png(),
         step: 0,
     };
     let lim = RgbdLimits::default();

@@ -14,9 +14,8 @@ use graspd_core::GraspType;
 use graspd_core::perception::grasp_type_detection::{IMAGENET_MEAN, IMAGENET_STD};
 use graspd_core::perception::{
     CameraIntrinsics, DecodedFrame, GraspTypeModel, ModelError, TypeMaps, attention_pixel,
-    back_project_attention, choose_type, init_onnx_runtime, type_probabilities,
+    choose_type, init_onnx_runtime, type_probabilities,
 };
-use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use onnx_builder::{DOUBLE, Dim, FLOAT, ModelBuilder, conv1x1_model};
 use std::path::{Path, PathBuf};
 
@@ -212,9 +211,8 @@ fn maps_are_the_sigmoid_of_the_known_logits() {
     broken.rgb.pop();
     let e = model.infer(&broken).unwrap_err();
     assert!(matches!(e, ModelError::Inference(_)), "{e:?}");
-    let plane = maps.to_plane32(GraspType::Power);
-    assert_eq!((plane.width, plane.height), (64, 48));
-    assert_eq!(plane.data, maps.plane(GraspType::Power));
+    assert_eq!((maps.width, maps.height), (64, 48));
+    assert_eq!(maps.plane(GraspType::Power).len(), 64 * 48);
 }
 
 #[test]
@@ -457,41 +455,6 @@ fn attention_is_the_centre_of_the_strongest_blob() {
         attention_pixel(&maps, s, &vec![false; w * h], w, h, 6.0),
         None
     );
-}
-
-#[test]
-fn attention_is_back_projected_with_the_nearest_valid_depth() {
-    // fx 500, fy 400, cx 32, cy 24. A hole of 11 × 11 pixels around (30, 20) except (33, 21)
-    // at 0.7 m (distance √10) and (26, 20) at 0.9 m (distance 4); 2 m outside the hole.
-    let depth = |u: usize, v: usize| match (u, v) {
-        (33, 21) => 0.7,
-        (26, 20) => 0.9,
-        (25..=35, 15..=25) => 0.0,
-        _ => 2.0,
-    };
-    let mut f = frame(64, 48, |_, _| GREY, depth);
-    // (30.4, 19.6) rounds to (30, 20), which has no reading.
-    let p = back_project_attention(&f, 30.4, 19.6, 10.0).unwrap();
-    // ((33 − 32)·0.7/500, (21 − 24)·0.7/400, 0.7)
-    let want = Point3::new(0.0014, -0.00525, 0.7);
-    assert!((p - want).norm() < 1e-6, "{p} vs {want}");
-    // The radius bounds the search: √10 > 3.
-    assert_eq!(back_project_attention(&f, 30.0, 20.0, 3.0), None);
-    assert!(back_project_attention(&f, 30.0, 20.0, 3.2).is_some());
-    // A pixel with its own reading is its own point.
-    let p = back_project_attention(&f, 5.0, 6.0, 0.0).unwrap();
-    assert!((p - Point3::new(-27.0 * 2.0 / 500.0, -18.0 * 2.0 / 400.0, 2.0)).norm() < 1e-9);
-    // With a camera pose, in the world frame (as depth_to_cloud with CloudFrame::World).
-    let pose = Isometry3::from_parts(
-        Translation3::new(0.1, 0.2, 0.3),
-        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::FRAC_PI_2),
-    );
-    f.camera_to_world = Some(pose);
-    let p = back_project_attention(&f, 30.4, 19.6, 10.0).unwrap();
-    // Rotation by 90° about z: (x, y, z) → (−y, x, z), then the translation.
-    let want = Point3::new(0.1 + 0.00525, 0.2 + 0.0014, 0.3 + 0.7);
-    assert!((p - want).norm() < 1e-6, "{p} vs {want}");
-    assert_eq!(back_project_attention(&f, f64::NAN, 1.0, 5.0), None);
 }
 
 #[test]

@@ -97,10 +97,6 @@ pub struct ImageHints {
 }
 
 impl ImageHints {
-    pub fn any(&self) -> bool {
-        self.field().is_some()
-    }
-
     /// The first hint given, by its field name.
     pub fn field(&self) -> Option<&'static str> {
         if self.attention_pixel.is_some() {
@@ -575,10 +571,6 @@ impl GraspService {
                 (info.object.clone(), Some(perceived))
             }
         };
-        // Only perception sets detected probabilities.
-        if perceived.is_none() {
-            hints.detected_types = None;
-        }
         let max_points = self.inner.limits.max_points;
         if cloud.len() > max_points {
             return Err(ServiceError::TooLarge(FieldError::new(
@@ -894,6 +886,15 @@ fn validate_hints(mut hints: PlanHints, hand: &HandDescription) -> Result<PlanHi
     }
     if let Some(p) = &hints.attention_point {
         finite_point(p, "hints.attention_point")?;
+    }
+    // Set by perception, or by a library caller with its own model: probabilities.
+    if let Some(p) = &hints.detected_types
+        && !p.iter().all(|v| (0.0..=1.0).contains(v))
+    {
+        return Err(FieldError::new(
+            "hints.detected_types",
+            format!("must be six probabilities in [0, 1], got {p:?}"),
+        ));
     }
     if let Some(p) = &hints.viewpoint {
         finite_point(p, "hints.viewpoint")?;

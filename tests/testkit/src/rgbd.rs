@@ -15,6 +15,7 @@
 use crate::render::{Camera, Intrinsics, gaussian};
 use crate::ycb::{Object, mesh, mesh_aabb};
 use crate::{Result, TriMesh};
+use image::{ExtendedColorType, ImageEncoder, codecs::png::PngEncoder};
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use parry3d_f64::math::Vector;
 use parry3d_f64::query::{PointQuery, Ray, RayCast};
@@ -245,10 +246,34 @@ impl RgbdRender {
             .collect()
     }
 
+    /// The colour as an 8-bit RGB PNG file.
+    pub fn color_png(&self) -> Vec<u8> {
+        png(&self.rgb, self.width, self.height, ExtendedColorType::Rgb8)
+    }
+
+    /// The depth as a 16-bit grey PNG file in millimetres (0 = no reading).
+    pub fn depth_png(&self) -> Vec<u8> {
+        // PNG stores 16-bit samples big-endian; the encoder takes them in native order.
+        let bytes: Vec<u8> = self
+            .depth_mm()
+            .iter()
+            .flat_map(|d| d.to_ne_bytes())
+            .collect();
+        png(&bytes, self.width, self.height, ExtendedColorType::L16)
+    }
+
     /// The depth as `32FC1` bytes (little-endian metres).
     pub fn depth_f32_le(&self) -> Vec<u8> {
         self.depth.iter().flat_map(|d| d.to_le_bytes()).collect()
     }
+}
+
+fn png(data: &[u8], w: usize, h: usize, ty: ExtendedColorType) -> Vec<u8> {
+    let mut out = Vec::new();
+    PngEncoder::new(&mut out)
+        .write_image(data, w as u32, h as u32, ty)
+        .expect("PNG encoding into memory");
+    out
 }
 
 #[cfg(test)]

@@ -1,7 +1,8 @@
 //! Grasp-type detection (method.md §4, dissertation ch. 4.2.2): a fully convolutional network
 //! gives six pixel-wise probability maps, one per grasp type (Eq 4.1–4.2); the object's type
 //! probabilities are the maps' means over its region (Eq 4.3); the attention point is the
-//! strongest mean-shift mode of the chosen type's map inside the region, back-projected to 3-D.
+//! strongest mean-shift mode of the chosen type's map inside the region (its 3-D point is found
+//! on the target's points by [`super::information`]).
 //!
 //! The network runs in ONNX Runtime through `ort`, loaded at run time ([`init_onnx_runtime`]:
 //! `ORT_DYLIB_PATH` or an explicit path; `scripts/fetch-onnxruntime.sh` fetches the library).
@@ -24,11 +25,8 @@
 //! Load-time checks ([`GraspTypeModel::load`]) name what was found against what the contract
 //! needs, so that a wrongly exported model fails at start, not at the first request.
 
-use super::depth_to_cloud::back_project;
 use super::rgbd::DecodedFrame;
-use super::saliency::Plane32;
 use crate::grasp_type::GraspType;
-use nalgebra::Point3;
 use ort::environment::Environment;
 use ort::session::Session;
 use ort::value::{TensorElementType, TensorRef, ValueType};
@@ -175,15 +173,6 @@ impl TypeMaps {
             scale_index(u, frame_w, self.width),
             scale_index(v, frame_h, self.height),
         )
-    }
-
-    /// The map of type `s` as a [`Plane32`] (map size), e.g. to combine it with saliency.
-    pub fn to_plane32(&self, s: GraspType) -> Plane32 {
-        Plane32 {
-            width: self.width,
-            height: self.height,
-            data: self.plane(s).to_vec(),
-        }
     }
 
     /// The maps reduced (area average) so that neither side exceeds `max_side` (at least 1),
@@ -794,69 +783,9 @@ pub fn attention_pixel(
     best.map(|(_, _, x, y)| (x, y))
 }
 
-/// The 3-D attention point: frame pixel (u, v) (e.g. from [`attention_pixel`]) back-projected
-/// with the depth of the nearest valid depth pixel within `search_radius_px` of the pixel
-/// nearest to (u, v) — the attention point often falls on a depth hole (edges, dark or shiny
-/// surfaces). The point is that pixel's own (its u, v and depth), in the world frame when the
-/// frame has a camera-to-world transform, else in the camera frame (as
-/// [`depth_to_cloud`](super::depth_to_cloud::depth_to_cloud) with `CloudFrame::World`).
-///
-/// Nearest is Euclidean in pixels; ties go to the smaller v, then the smaller u. `None` when
-/// no valid depth lies within the radius or (u, v) is not finite.
-pub fn back_project_attention(
-    frame: &DecodedFrame,
-    u: f64,
-    v: f64,
-    search_radius_px: f64,
-) -> Option<Point3<f64>> {
-    if !(u.is_finite() && v.is_finite()) || frame.width == 0 || frame.height == 0 {
-        return None;
-    }
-    let (w, h) = (frame.width as i64, frame.height as i64);
-    let u0 = (u.round() as i64).clamp(0, w - 1);
-    let v0 = (v.round() as i64).clamp(0, h - 1);
-    let radius = search_radius_px.max(0.0);
-    let r_max = radius.floor() as i64;
-    // (squared distance, v, u, depth); rings of growing Chebyshev radius r hold pixels at
-    // Euclidean distance ≥ r, so the search ends once r exceeds the best distance.
-    let mut best: Option<(i64, i64, i64, f32)> = None;
-    for r in 0..=r_max {
-        if best.is_some_and(|(d2, _, _, _)| r * r > d2) {
-            break;
-        }
-        for dv in -r..=r {
-            let y = v0 + dv;
-            if y < 0 || y >= h {
-                continue;
-            }
-            let step = if dv.abs() == r { 1 } else { 2 * r.max(1) };
-            let mut du = -r;
-            while du <= r {
-                let x = u0 + du;
-                let d2 = du * du + dv * dv;
-                if x >= 0 && x < w && (d2 as f64) <= radius * radius {
-                    let d = frame.depth[(y * w + x) as usize];
-                    let better = best.is_none_or(|(bd2, by, bx, _)| (d2, y, x) < (bd2, by, bx));
-                    if d > 0.0 && d.is_finite() && better {
-                        best = Some((d2, y, x, d));
-                    }
-                }
-                du += step;
-            }
-        }
-    }
-    let (_, y, x, z) = best?;
-    let p = back_project(&frame.intrinsics, x as f64, y as f64, z as f64);
-    Some(match &frame.camera_to_world {
-        Some(t) => t * p,
-        None => p,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::perception::rgbd::CameraIntrinsics;
 
     fn maps_with(width: usize, height: usize, f: impl Fn(usize, usize, usize) -> f32) -> TypeMaps {
         let mut probs = Vec::with_capacity(NUM_TYPES * width * height);
@@ -947,37 +876,6 @@ mod tests {
         );
     }
 
-    #[test]
-    fn nearest_valid_depth_ties_go_to_the_smaller_row_then_column() {
-        let (w, h) = (9, 9);
-        let mut depth = vec![0.0f32; w * h];
-        // Four pixels at distance 2 from (4, 4).
-        for (u, v, d) in [(6, 4, 1.0), (4, 6, 2.0), (2, 4, 3.0), (4, 2, 4.0)] {
-            depth[v * w + u] = d;
-        }
-        let frame = DecodedFrame {
-            width: w,
-            height: h,
-            rgb: vec![0; 3 * w * h],
-            valid_depth: 4,
-            depth,
-            intrinsics: CameraIntrinsics {
-                fx: 1.0,
-                fy: 1.0,
-                cx: 4.0,
-                cy: 4.0,
-            },
-            camera_to_world: None,
-        };
-        let p = back_project_attention(&frame, 4.0, 4.0, 5.0).unwrap();
-        assert_eq!(p, Point3::new(0.0, -8.0, 4.0)); // (4, 2) at 4 m
-        assert_eq!(back_project_attention(&frame, 4.0, 4.0, 1.9), None);
-        // Outside the image: clamped to the border pixel, then searched from there.
-        let p = back_project_attention(&frame, 50.0, 4.0, 3.0).unwrap();
-        assert_eq!(p, Point3::new(2.0, 0.0, 1.0)); // (6, 4) at 1 m
-    }
-
-    /// Meaningful only while no other test of this binary has loaded ONNX Runtime (none does).
     #[test]
     fn an_unloadable_library_is_named() {
         let path = std::env::temp_dir().join(format!("graspd-not-ort-{}.so", std::process::id()));

@@ -28,8 +28,8 @@ pub mod segmentation;
 
 pub use depth_to_cloud::{CloudFrame, PixelCloud, back_project, depth_to_cloud};
 pub use grasp_type_detection::{
-    GraspTypeModel, ModelError, TypeMaps, attention_pixel, back_project_attention, choose_type,
-    init_onnx_runtime, type_probabilities,
+    GraspTypeModel, ModelError, TypeMaps, attention_pixel, choose_type, init_onnx_runtime,
+    type_probabilities,
 };
 pub use information::{
     GraspInformation, InformationParams, PerceptionReport, PerceptionTimings, ProbabilityMaps,
@@ -38,7 +38,7 @@ pub use information::{
 pub use overlay::{draw_overlay, project};
 pub use rgbd::{
     CameraIntrinsics, ColorEncoding, DecodedFrame, DepthEncoding, ImageData, RgbdFrame, RgbdLimits,
-    declared_size, frame_size,
+    WireImage, camera_pose, sniff_encoding,
 };
 pub use roi::{RegionParams, SalientRegions, mask_box, region_of_interest, salient_regions};
 pub use saliency::{Plane32, SaliencyParams, saliency_map};

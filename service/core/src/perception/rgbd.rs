@@ -12,7 +12,7 @@
 
 use crate::error::FieldError;
 use image::{DynamicImage, ImageFormat, ImageReader, Limits};
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion};
 use std::fmt;
 use std::io::Cursor;
 
@@ -289,57 +289,136 @@ impl RgbdFrame {
     }
 }
 
-/// The size an image of the frame declares: `width × height` when both are given, else (0, 0)
-/// for a PNG / JPEG, whose header is read. Errors name `{field}.width` / `{field}.data`.
-pub fn declared_size(
-    width: u32,
-    height: u32,
-    data: &[u8],
-    compressed: bool,
-    field: &str,
-) -> Result<(usize, usize), FieldError> {
-    if width > 0 && height > 0 {
-        return Ok((width as usize, height as usize));
-    }
-    if !compressed || (width, height) != (0, 0) {
-        return Err(FieldError::new(
-            format!("{field}.{}", if width == 0 { "width" } else { "height" }),
-            format!(
-                "the image is {width}×{height}; both sides must be > 0 (they may be left 0 only \
-                 for png or jpeg, whose size is read from the file)"
-            ),
-        ));
-    }
-    let dims = ImageReader::new(Cursor::new(data))
-        .with_guessed_format()
-        .ok()
-        .and_then(|r| r.into_dimensions().ok())
-        .ok_or_else(|| {
-            FieldError::new(
-                format!("{field}.data"),
-                format!("not a readable PNG or JPEG ({} bytes)", data.len()),
-            )
-        })?;
-    Ok((dims.0 as usize, dims.1 as usize))
+/// One image of a frame as the transports receive it: the declared size (0 × 0 for a PNG or
+/// JPEG, whose header gives it), the encoding's wire name (empty: PNG or JPEG told by its magic
+/// bytes), the row stride of a raw image (0 = packed) and the bytes.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct WireImage {
+    pub width: u32,
+    pub height: u32,
+    pub encoding: String,
+    pub step: u32,
+    pub data: Vec<u8>,
 }
 
-/// The frame's size from its two images' (see [`declared_size`]): they must agree (colour and
-/// depth registered to one size). `field` names the frame (e.g. `rgbd`).
-pub fn frame_size(
-    color: (usize, usize),
-    depth: (usize, usize),
+/// `png` or `jpeg` by the file's magic bytes, for an image sent without an encoding name.
+pub fn sniff_encoding(data: &[u8]) -> Option<&'static str> {
+    if data.starts_with(&[0x89, b'P', b'N', b'G']) {
+        Some("png")
+    } else if data.starts_with(&[0xFF, 0xD8]) {
+        Some("jpeg")
+    } else {
+        None
+    }
+}
+
+impl WireImage {
+    /// The encoding name, sniffed when left empty.
+    fn encoding_name(&self) -> &str {
+        if self.encoding.is_empty() {
+            sniff_encoding(&self.data).unwrap_or("")
+        } else {
+            &self.encoding
+        }
+    }
+
+    /// The declared size, read from a PNG / JPEG header when both sides are 0. Errors name
+    /// `{field}.width` / `{field}.data`.
+    fn size(&self, compressed: bool, field: &str) -> Result<(usize, usize), FieldError> {
+        let (width, height) = (self.width, self.height);
+        if width > 0 && height > 0 {
+            return Ok((width as usize, height as usize));
+        }
+        if !compressed || (width, height) != (0, 0) {
+            return Err(FieldError::new(
+                format!("{field}.{}", if width == 0 { "width" } else { "height" }),
+                format!(
+                    "the image is {width}×{height}; both sides must be > 0 (they may be left 0 only \
+                     for png or jpeg, whose size is read from the file)"
+                ),
+            ));
+        }
+        let dims = ImageReader::new(Cursor::new(&self.data))
+            .with_guessed_format()
+            .ok()
+            .and_then(|r| r.into_dimensions().ok())
+            .ok_or_else(|| {
+                FieldError::new(
+                    format!("{field}.data"),
+                    format!("not a readable PNG or JPEG ({} bytes)", self.data.len()),
+                )
+            })?;
+        Ok((dims.0 as usize, dims.1 as usize))
+    }
+}
+
+/// A camera pose from a position and a quaternion (w, x, y, z) as sent: the quaternion is
+/// normalised; a zero or non-finite one is refused naming `{field}.orientation`.
+pub fn camera_pose(
+    position: Point3<f64>,
+    q: Quaternion<f64>,
     field: &str,
-) -> Result<(usize, usize), FieldError> {
-    if color != depth {
+) -> Result<Isometry3<f64>, FieldError> {
+    let norm = q.norm();
+    if !norm.is_finite() || norm < 1e-9 {
         return Err(FieldError::new(
-            format!("{field}.depth"),
-            format!(
-                "the depth image is {}×{} but the colour image is {}×{}; register them to one size",
-                depth.0, depth.1, color.0, color.1
-            ),
+            format!("{field}.orientation"),
+            "must be a finite, non-zero quaternion",
         ));
     }
-    Ok(color)
+    Ok(Isometry3::from_parts(
+        position.coords.into(),
+        UnitQuaternion::from_quaternion(q),
+    ))
+}
+
+impl RgbdFrame {
+    /// The frame from its two images as received (both transports and the CLI build it here):
+    /// encodings parsed, sizes declared or read from the files, and colour and depth of one
+    /// size. Pixels are checked later, by [`RgbdFrame::decode`]. `field` names the frame in
+    /// errors (`rgbd.color.encoding`, `rgbd.depth`, …).
+    pub fn from_wire(
+        color: WireImage,
+        depth: WireImage,
+        intrinsics: CameraIntrinsics,
+        depth_scale: Option<f64>,
+        camera_to_world: Option<Isometry3<f64>>,
+        field: &str,
+    ) -> Result<Self, FieldError> {
+        let (cf, df) = (format!("{field}.color"), format!("{field}.depth"));
+        let color_encoding =
+            ColorEncoding::parse(color.encoding_name(), &format!("{cf}.encoding"))?;
+        let depth_encoding =
+            DepthEncoding::parse(depth.encoding_name(), &format!("{df}.encoding"))?;
+        let color_size = color.size(color_encoding.bytes_per_pixel().is_none(), &cf)?;
+        let depth_size = depth.size(depth_encoding.bytes_per_pixel().is_none(), &df)?;
+        if color_size != depth_size {
+            return Err(FieldError::new(
+                df,
+                format!(
+                    "the depth image is {}×{} but the colour image is {}×{}; register them to one size",
+                    depth_size.0, depth_size.1, color_size.0, color_size.1
+                ),
+            ));
+        }
+        Ok(RgbdFrame {
+            color: ImageData {
+                encoding: color_encoding,
+                data: color.data,
+                step: color.step as usize,
+            },
+            depth: ImageData {
+                encoding: depth_encoding,
+                data: depth.data,
+                step: depth.step as usize,
+            },
+            width: color_size.0,
+            height: color_size.1,
+            intrinsics,
+            depth_scale: depth_scale.filter(|s| *s != 0.0),
+            camera_to_world,
+        })
+    }
 }
 
 /// Checks the byte count of a raw image and returns its row stride.

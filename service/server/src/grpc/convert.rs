@@ -13,8 +13,8 @@ use graspd_core::cloud::{
 };
 use graspd_core::hand::{Finger, GraspRealisation, HandGeometry, TypeEquivalence};
 use graspd_core::perception::{
-    CameraIntrinsics, ColorEncoding, DepthEncoding, ImageData, PerceptionReport, PerceptionTimings,
-    ProbabilityMaps, RgbdFrame, TargetChoice, declared_size, frame_size,
+    CameraIntrinsics, PerceptionReport, PerceptionTimings, ProbabilityMaps, RgbdFrame,
+    TargetChoice, WireImage, camera_pose,
 };
 use graspd_core::planning::{
     CollisionReport, Contact, Opposition, PlaneSource, PlannerMode, Pose, Quality, StageStats,
@@ -33,7 +33,7 @@ use graspd_proto::v1::plan_grasp_request::{Hand, Input};
 use graspd_proto::v1::stabilize_request::Kind;
 use graspd_proto::v1::tactile_detector::Kind as DetectorKind;
 use graspd_proto::v1::tactile_finger::Layout as FingerLayout;
-use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Point3, Quaternion, UnitQuaternion, Vector3};
 
 // ---------------------------------------------------------------------------------------------
 // Value types
@@ -491,72 +491,45 @@ fn hints_from_proto(h: Option<pb::PlanHints>) -> Result<(PlanHints, ImageHints),
     Ok((hints, image))
 }
 
-/// A caller's camera pose: the quaternion is normalised; a zero or non-finite one is refused.
-fn camera_pose_from_proto(p: &pb::Pose, field: &str) -> Result<Isometry3<f64>, FieldError> {
-    let position = point_from_proto(required(&p.position, &format!("{field}.position"))?);
-    let q = required(&p.orientation, &format!("{field}.orientation"))?;
-    let q = Quaternion::new(q.w, q.x, q.y, q.z);
-    let norm = q.norm();
-    if !norm.is_finite() || norm < 1e-9 {
-        return Err(FieldError::new(
-            format!("{field}.orientation"),
-            "must be a finite, non-zero quaternion",
-        ));
-    }
-    Ok(Isometry3::from_parts(
-        position.coords.into(),
-        UnitQuaternion::from_quaternion(q),
-    ))
-}
-
 /// The RGB-D frame as received; sizes and encodings are checked here, pixels by the facade.
 fn rgbd_from_proto(f: pb::RgbdFrame) -> Result<RgbdFrame, FieldError> {
-    let color = f.color.unwrap_or_default();
-    let depth = f.depth.unwrap_or_default();
-    let color_encoding = ColorEncoding::parse(&color.encoding, "rgbd.color.encoding")?;
-    let depth_encoding = DepthEncoding::parse(&depth.encoding, "rgbd.depth.encoding")?;
-    let color_size = declared_size(
-        color.width,
-        color.height,
-        &color.data,
-        color_encoding.bytes_per_pixel().is_none(),
-        "rgbd.color",
-    )?;
-    let depth_size = declared_size(
-        depth.width,
-        depth.height,
-        &depth.data,
-        depth_encoding.bytes_per_pixel().is_none(),
-        "rgbd.depth",
-    )?;
-    let (width, height) = frame_size(color_size, depth_size, "rgbd")?;
+    let wire = |i: Option<pb::Image>| {
+        let i = i.unwrap_or_default();
+        WireImage {
+            width: i.width,
+            height: i.height,
+            encoding: i.encoding,
+            step: i.step,
+            data: i.data,
+        }
+    };
     let k = f.intrinsics.unwrap_or_default();
-    Ok(RgbdFrame {
-        color: ImageData {
-            encoding: color_encoding,
-            data: color.data,
-            step: color.step as usize,
-        },
-        depth: ImageData {
-            encoding: depth_encoding,
-            data: depth.data,
-            step: depth.step as usize,
-        },
-        width,
-        height,
-        intrinsics: CameraIntrinsics {
+    let camera_to_world = match &f.camera_to_world {
+        None => None,
+        Some(p) => {
+            let field = "rgbd.camera_to_world";
+            let position = point_from_proto(required(&p.position, &format!("{field}.position"))?);
+            let q = required(&p.orientation, &format!("{field}.orientation"))?;
+            Some(camera_pose(
+                position,
+                Quaternion::new(q.w, q.x, q.y, q.z),
+                field,
+            )?)
+        }
+    };
+    RgbdFrame::from_wire(
+        wire(f.color),
+        wire(f.depth),
+        CameraIntrinsics {
             fx: k.fx,
             fy: k.fy,
             cx: k.cx,
             cy: k.cy,
         },
-        depth_scale: (f.depth_scale != 0.0).then_some(f.depth_scale),
-        camera_to_world: f
-            .camera_to_world
-            .as_ref()
-            .map(|p| camera_pose_from_proto(p, "rgbd.camera_to_world"))
-            .transpose()?,
-    })
+        Some(f.depth_scale),
+        camera_to_world,
+        "rgbd",
+    )
 }
 
 /// Encodes a frame for the wire (clients).

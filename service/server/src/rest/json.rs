@@ -19,8 +19,8 @@ use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
 use base64::Engine;
 use graspd_core::cloud::{Plane, PointCloud, decode_packed_vec3};
 use graspd_core::perception::{
-    CameraIntrinsics, ColorEncoding, DepthEncoding, ImageData, PerceptionReport, PerceptionTimings,
-    RgbdFrame, TargetChoice, declared_size, frame_size,
+    CameraIntrinsics, PerceptionReport, PerceptionTimings, RgbdFrame, TargetChoice, WireImage,
+    camera_pose,
 };
 use graspd_core::planning::{
     CollisionReport, PlaneSource, PlannerMode, Pose, Quality, StageStats, Timings, TypeSource,
@@ -32,7 +32,7 @@ use graspd_core::tactile::{
 use graspd_core::{
     FieldError, GraspPlan, GraspType, HandDescription, HandPart, PlanHints, PlannerOptions,
 };
-use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Point3, Quaternion, Vector3};
 use serde::de::{self, DeserializeOwned, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
 use std::fmt;
@@ -384,111 +384,66 @@ pub struct ImageParts {
     pub depth: Option<Vec<u8>>,
 }
 
-/// The encoding of a file part left without one: PNG or JPEG by its magic bytes.
-fn sniff_encoding(data: &[u8]) -> &'static str {
-    if data.starts_with(&[0x89, b'P', b'N', b'G']) {
-        "png"
-    } else if data.starts_with(&[0xFF, 0xD8]) {
-        "jpeg"
-    } else {
-        ""
-    }
-}
-
-fn image_bytes(
-    img: &mut ImageJson,
-    part: Option<Vec<u8>>,
-    field: &str,
-) -> Result<Vec<u8>, FieldError> {
-    match (img.data.take(), part) {
-        (Some(_), Some(_)) => Err(FieldError::new(
-            format!("{field}.data"),
-            "give the image either as base64 data or as a multipart part, not both",
-        )),
+/// An image of the JSON with its bytes: base64 `data` or the multipart part (one of them).
+fn wire_image(img: ImageJson, part: Option<Vec<u8>>, field: &str) -> Result<WireImage, FieldError> {
+    let data = match (img.data, part) {
+        (Some(_), Some(_)) => {
+            return Err(FieldError::new(
+                format!("{field}.data"),
+                "give the image either as base64 data or as a multipart part, not both",
+            ));
+        }
         (Some(b64), None) => base64::engine::general_purpose::STANDARD
             .decode(b64.as_bytes())
-            .map_err(|e| FieldError::new(format!("{field}.data"), format!("not base64: {e}"))),
-        (None, Some(bytes)) => {
-            if img.encoding.is_empty() {
-                img.encoding = sniff_encoding(&bytes).into();
-            }
-            Ok(bytes)
+            .map_err(|e| FieldError::new(format!("{field}.data"), format!("not base64: {e}")))?,
+        (None, Some(bytes)) => bytes,
+        (None, None) => {
+            return Err(FieldError::new(
+                format!("{field}.data"),
+                "is required (base64, or a multipart part)",
+            ));
         }
-        (None, None) => Err(FieldError::new(
-            format!("{field}.data"),
-            "is required (base64, or a multipart part)",
-        )),
-    }
+    };
+    Ok(WireImage {
+        width: img.width,
+        height: img.height,
+        encoding: img.encoding,
+        step: img.step,
+        data,
+    })
 }
 
 /// The frame as received; sizes and encodings are checked here, pixels by the facade.
-fn rgbd_from_json(mut f: RgbdJson, parts: ImageParts) -> Result<RgbdFrame, FieldError> {
-    let color_data = image_bytes(&mut f.color, parts.color, "rgbd.color")?;
-    let depth_data = image_bytes(&mut f.depth, parts.depth, "rgbd.depth")?;
-    let color_encoding = ColorEncoding::parse(&f.color.encoding, "rgbd.color.encoding")?;
-    let depth_encoding = DepthEncoding::parse(&f.depth.encoding, "rgbd.depth.encoding")?;
-    let color_size = declared_size(
-        f.color.width,
-        f.color.height,
-        &color_data,
-        color_encoding.bytes_per_pixel().is_none(),
-        "rgbd.color",
-    )?;
-    let depth_size = declared_size(
-        f.depth.width,
-        f.depth.height,
-        &depth_data,
-        depth_encoding.bytes_per_pixel().is_none(),
-        "rgbd.depth",
-    )?;
-    let (width, height) = frame_size(color_size, depth_size, "rgbd")?;
+fn rgbd_from_json(f: RgbdJson, parts: ImageParts) -> Result<RgbdFrame, FieldError> {
+    let color = wire_image(f.color, parts.color, "rgbd.color")?;
+    let depth = wire_image(f.depth, parts.depth, "rgbd.depth")?;
     let k = f
         .intrinsics
         .ok_or_else(|| FieldError::new("rgbd.intrinsics", "is required (fx, fy, cx, cy)"))?;
-    let camera_to_world = match f.camera_to_world {
-        None => None,
-        Some(p) => {
-            let q = Quaternion::new(
-                p.orientation.w,
-                p.orientation.x,
-                p.orientation.y,
-                p.orientation.z,
-            );
-            let norm = q.norm();
-            if !norm.is_finite() || norm < 1e-9 {
-                return Err(FieldError::new(
-                    "rgbd.camera_to_world.orientation",
-                    "must be a finite, non-zero quaternion",
-                ));
-            }
-            Some(Isometry3::from_parts(
-                p.position.vector().into(),
-                UnitQuaternion::from_quaternion(q),
-            ))
-        }
-    };
-    Ok(RgbdFrame {
-        color: ImageData {
-            encoding: color_encoding,
-            data: color_data,
-            step: f.color.step as usize,
-        },
-        depth: ImageData {
-            encoding: depth_encoding,
-            data: depth_data,
-            step: f.depth.step as usize,
-        },
-        width,
-        height,
-        intrinsics: CameraIntrinsics {
+    let camera_to_world = f
+        .camera_to_world
+        .map(|p| {
+            let q = p.orientation;
+            camera_pose(
+                p.position.point(),
+                Quaternion::new(q.w, q.x, q.y, q.z),
+                "rgbd.camera_to_world",
+            )
+        })
+        .transpose()?;
+    RgbdFrame::from_wire(
+        color,
+        depth,
+        CameraIntrinsics {
             fx: k.fx,
             fy: k.fy,
             cx: k.cx,
             cy: k.cy,
         },
-        depth_scale: f.depth_scale.filter(|s| *s != 0.0),
+        f.depth_scale,
         camera_to_world,
-    })
+        "rgbd",
+    )
 }
 
 fn points_from_json(

@@ -64,20 +64,21 @@ pub async fn plan(
     query: Result<Query<PlanQuery>, axum::extract::rejection::QueryRejection>,
     request: Request,
 ) -> Result<Response, ApiError> {
-    let query = query
-        .map_err(|e| ApiError::invalid(FieldError::new("query", e.body_text())))?
-        .0;
-    let png = match query.format.as_deref() {
-        None | Some("json") => false,
-        Some("png") => true,
-        Some(other) => {
-            return Err(ApiError::invalid(FieldError::new(
+    let limits = *runner.service().limits();
+    let format = query
+        .map_err(|e| ApiError::invalid(FieldError::new("query", e.body_text())))
+        .and_then(|q| match q.0.format.as_deref() {
+            None | Some("json") => Ok(false),
+            Some("png") => Ok(true),
+            Some(other) => Err(ApiError::invalid(FieldError::new(
                 "format",
                 format!("unknown format '{}' (json or png)", other.escape_debug()),
-            )));
-        }
+            ))),
+        });
+    let png = match format {
+        Ok(png) => png,
+        Err(e) => return Err(after_reading_body(request, &limits, e).await),
     };
-    let limits = *runner.service().limits();
     let content_type = request
         .headers()
         .get(CONTENT_TYPE)
@@ -96,13 +97,14 @@ pub async fn plan(
         let body: PlanRequestJson = json::parse(&bytes, "body")?;
         json::plan_request_from_json(body, None, Default::default(), &limits)?
     } else {
-        return Err(ApiError::new(
+        let e = ApiError::new(
             StatusCode::UNSUPPORTED_MEDIA_TYPE,
             "unsupported_media_type",
             format!(
                 "content type '{content_type}' is not supported; send application/json (curl: -H 'content-type: application/json') or multipart/form-data"
             ),
-        ));
+        );
+        return Err(after_reading_body(request, &limits, e).await);
     };
     let mut plan_request = plan_request;
     if png {
@@ -123,6 +125,14 @@ pub async fn plan(
         return Ok(([(CONTENT_TYPE, "image/png")], bytes).into_response());
     }
     Ok(Json(PlanResponseJson::from(&plan)).into_response())
+}
+
+/// `e`, once the body (up to the size limit) has been read: an answer sent while an HTTP/1.1
+/// client is still writing a large body closes the connection under it, and the client sees a
+/// broken pipe instead of the error.
+async fn after_reading_body(request: Request, limits: &Limits, e: ApiError) -> ApiError {
+    let _ = axum::body::to_bytes(request.into_body(), limits.max_message_bytes).await;
+    e
 }
 
 /// A body that could not be read: over the limit (413) or broken (400).

@@ -11,17 +11,8 @@
 use graspd_testkit::Object;
 use graspd_testkit::rgbd::{RgbdScene, SceneObject};
 use graspd_testkit::workspace_root;
-use image::{ExtendedColorType, ImageEncoder, codecs::png::PngEncoder};
 use std::path::PathBuf;
 use std::process::ExitCode;
-
-fn png(data: &[u8], w: usize, h: usize, ty: ExtendedColorType) -> Result<Vec<u8>, String> {
-    let mut out = Vec::new();
-    PngEncoder::new(&mut out)
-        .write_image(data, w as u32, h as u32, ty)
-        .map_err(|e| e.to_string())?;
-    Ok(out)
-}
 
 fn run() -> Result<PathBuf, String> {
     let dir = std::env::args()
@@ -35,8 +26,6 @@ fn run() -> Result<PathBuf, String> {
     ])
     .render()
     .map_err(|e| e.to_string())?;
-    // PNG stores 16-bit samples big-endian; the encoder takes them in native order.
-    let depth: Vec<u8> = r.depth_mm().iter().flat_map(|d| d.to_ne_bytes()).collect();
     let t = r.camera_to_world.translation.vector;
     let q = r.camera_to_world.rotation;
     let k = r.intrinsics;
@@ -48,14 +37,8 @@ fn run() -> Result<PathBuf, String> {
         k.fx, k.fy, k.cx, k.cy, t.x, t.y, t.z, q.i, q.j, q.k, q.w
     );
     let files = [
-        (
-            "rgb.png",
-            png(&r.rgb, r.width, r.height, ExtendedColorType::Rgb8)?,
-        ),
-        (
-            "depth.png",
-            png(&depth, r.width, r.height, ExtendedColorType::L16)?,
-        ),
+        ("rgb.png", r.color_png()),
+        ("depth.png", r.depth_png()),
         ("request.json", request.into_bytes()),
     ];
     for (name, bytes) in files {
