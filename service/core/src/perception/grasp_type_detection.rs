@@ -88,7 +88,7 @@ pub fn init_onnx_runtime(dylib: Option<&Path>) -> Result<(), ModelError> {
     runtime_env(dylib).map(|_| ())
 }
 
-fn runtime_env(dylib: Option<&Path>) -> Result<Environment, ModelError> {
+pub(crate) fn runtime_env(dylib: Option<&Path>) -> Result<Environment, ModelError> {
     let missing = |p: &Path| ModelError::Runtime {
         path: p.to_path_buf(),
         reason: "no such file (scripts/fetch-onnxruntime.sh fetches it)".into(),
@@ -431,7 +431,7 @@ fn bilinear_taps(src: usize, dst: usize) -> Vec<(usize, usize, f32)> {
 }
 
 /// Formats a shape, dynamic dimensions by their symbol or `?`.
-fn fmt_dims(dims: &[i64], symbols: &[String]) -> String {
+pub(crate) fn fmt_dims(dims: &[i64], symbols: &[String]) -> String {
     let parts: Vec<String> = dims
         .iter()
         .enumerate()
@@ -521,7 +521,7 @@ fn check_contract(session: &Session) -> Result<(usize, Option<usize>, Option<usi
     Ok((dims[1] as usize, side(dims[2]), side(dims[3])))
 }
 
-fn tensor_info(t: &ValueType) -> Option<(TensorElementType, &[i64], &[String])> {
+pub(crate) fn tensor_info(t: &ValueType) -> Option<(TensorElementType, &[i64], &[String])> {
     match t {
         ValueType::Tensor {
             ty,

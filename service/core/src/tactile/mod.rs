@@ -10,6 +10,7 @@ pub mod desired_force;
 pub mod detector;
 pub mod force_estimation;
 pub mod layout;
+pub mod lstm_detector;
 pub mod pid;
 pub mod recording;
 pub mod stabilizer;
@@ -23,11 +24,12 @@ pub use detector::{
 };
 pub use force_estimation::{ContactEstimate, EmOptions, ForceEstimator, Gmm1d};
 pub use layout::{LayoutSpec, SensorCatalog, SensorLayout, parse_layout_toml};
+pub use lstm_detector::{LstmDetector, TactileModel, TactileModelError};
 pub use pid::{Pid, PidGains};
 pub use recording::{LabelThresholds, Recording};
 pub use stabilizer::{
     DetectorChoice, FingerConfig, FingerReading, FingerResult, ForceUnit, Frame, FrameResult,
-    Stabilizer, StabilizerConfig, analyze,
+    Stabilizer, StabilizerConfig, analyze, analyze_with_detectors,
 };
 pub use tactile_image::TactileImage;
 pub use taring::{Baseline, ElectrodePolarity, TareConfig};

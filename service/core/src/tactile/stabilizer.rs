@@ -47,6 +47,10 @@ pub struct FingerConfig {
 /// Which detector produces the contact event and material.
 #[derive(Debug, Clone, PartialEq)]
 pub enum DetectorChoice {
+    /// Whatever the host offers by default: the server's loaded model
+    /// (`tactile::lstm_detector`) when it fits the session, else the model-free detector with
+    /// default thresholds. [`Stabilizer::new`] uses the model-free detector.
+    Default,
     /// The model-free fallback (see `detector`).
     ModelFree(ModelFreeThresholds),
     /// A learned model by name (the LSTM of Eq 6.1–6.4); the caller supplies it with
@@ -82,7 +86,7 @@ impl Default for StabilizerConfig {
             pid: PidGains::default(),
             alpha: 0.5,
             calibration_gain: None,
-            detector: DetectorChoice::ModelFree(ModelFreeThresholds::default()),
+            detector: DetectorChoice::Default,
         }
     }
 }
@@ -263,6 +267,7 @@ impl Stabilizer {
         config.validate()?;
         let t = match &config.detector {
             DetectorChoice::ModelFree(t) => *t,
+            DetectorChoice::Default => ModelFreeThresholds::default(),
             DetectorChoice::Model(name) => {
                 return Err(FieldError::new(
                     "session.detector",
@@ -438,7 +443,20 @@ impl Stabilizer {
 /// Runs a whole recorded sequence through a fresh session (the REST analyze endpoint): one
 /// result per frame. An error names the frame by index (`frames[12].fingers[0].electrodes: …`).
 pub fn analyze(config: StabilizerConfig, frames: &[Frame]) -> Result<Vec<FrameResult>, FieldError> {
-    let mut s = Stabilizer::new(config)?;
+    analyze_session(Stabilizer::new(config)?, frames)
+}
+
+/// [`analyze`] with caller-supplied detectors (one per finger, see
+/// [`Stabilizer::with_detectors`]).
+pub fn analyze_with_detectors(
+    config: StabilizerConfig,
+    detectors: Vec<Box<dyn EventDetector>>,
+    frames: &[Frame],
+) -> Result<Vec<FrameResult>, FieldError> {
+    analyze_session(Stabilizer::with_detectors(config, detectors)?, frames)
+}
+
+fn analyze_session(mut s: Stabilizer, frames: &[Frame]) -> Result<Vec<FrameResult>, FieldError> {
     frames
         .iter()
         .enumerate()

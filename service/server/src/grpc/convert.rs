@@ -1202,17 +1202,21 @@ pub fn tactile_session_to_proto(r: &TactileSessionRequest) -> pb::TactileSession
         }),
         alpha: Some(c.alpha),
         calibration_gain: c.calibration_gain,
-        detector: Some(pb::TactileDetector {
-            kind: Some(match &c.detector {
-                DetectorChoice::Model(n) => DetectorKind::Model(n.clone()),
-                DetectorChoice::ModelFree(t) => DetectorKind::ModelFree(pb::ModelFreeThresholds {
+        // Default: unset, so that the server chooses (its model when one is loaded).
+        detector: match &c.detector {
+            DetectorChoice::Default => None,
+            DetectorChoice::Model(n) => Some(pb::TactileDetector {
+                kind: Some(DetectorKind::Model(n.clone())),
+            }),
+            DetectorChoice::ModelFree(t) => Some(pb::TactileDetector {
+                kind: Some(DetectorKind::ModelFree(pb::ModelFreeThresholds {
                     pdc_contact: Some(t.pdc_contact),
                     electrode_contact: Some(t.electrode_contact),
                     slip_vibration: Some(t.slip_vibration),
                     steepness: Some(t.steepness),
-                }),
+                })),
             }),
-        }),
+        },
     }
 }
 
