@@ -255,22 +255,39 @@ impl GraspTypeModel {
     /// `intra_threads`: ONNX Runtime threads per run (0: its default, one per core). Initialises
     /// ONNX Runtime from `$ORT_DYLIB_PATH` if [`init_onnx_runtime`] has not been called.
     pub fn load(path: &Path, intra_threads: usize) -> Result<Self, ModelError> {
+        // ONNX Runtime's message for a missing file is an opaque system error.
+        if !path.is_file() {
+            return Err(ModelError::Load {
+                path: path.to_path_buf(),
+                reason: "no such file".into(),
+            });
+        }
+        Self::build(path, intra_threads, |b| b.commit_from_file(path))
+    }
+
+    /// Loads a model held in memory (the copy of models/grasp_type/grasp_type.onnx built into
+    /// graspd); `name` stands for its path in messages.
+    pub fn from_bytes(bytes: &[u8], name: &str, intra_threads: usize) -> Result<Self, ModelError> {
+        Self::build(Path::new(name), intra_threads, |b| {
+            b.commit_from_memory(bytes)
+        })
+    }
+
+    fn build(
+        path: &Path,
+        intra_threads: usize,
+        commit: impl FnOnce(&mut ort::session::builder::SessionBuilder) -> ort::Result<Session>,
+    ) -> Result<Self, ModelError> {
         let env = runtime_env(None)?;
         let load_err = |reason: String| ModelError::Load {
             path: path.to_path_buf(),
             reason,
         };
-        // ONNX Runtime's message for a missing file is an opaque system error.
-        if !path.is_file() {
-            return Err(load_err("no such file".into()));
-        }
         let mut builder = Session::builder(&env)
             .map_err(|e| load_err(e.to_string()))?
             .with_intra_threads(intra_threads)
             .map_err(|e| load_err(e.to_string()))?;
-        let session = builder
-            .commit_from_file(path)
-            .map_err(|e| load_err(e.to_string()))?;
+        let session = commit(&mut builder).map_err(|e| load_err(e.to_string()))?;
         let contract_err = |reason: String| ModelError::Contract {
             path: path.to_path_buf(),
             reason,
@@ -356,61 +373,74 @@ impl GraspTypeModel {
         })
     }
 
-    /// The `[1, C, h, w]` input: the frame resized (bilinear) to w × h where the model fixes its
-    /// size, colour normalised, depth in metres (0 where invalid).
+    /// The `[1, C, h, w]` input: [`resized_planes`] with the colour normalised.
     fn input_tensor(&self, frame: &DecodedFrame, w: usize, h: usize) -> Vec<f32> {
+        let mut data = resized_planes(frame, w, h, self.channels == 4);
         let n = w * h;
-        let mut data = vec![0.0f32; self.channels * n];
         // (x/255 − mean)/std as one multiply-add per value.
-        let gain: [f32; 3] = std::array::from_fn(|k| 1.0 / (255.0 * self.std[k]));
-        let bias: [f32; 3] = std::array::from_fn(|k| -self.mean[k] / self.std[k]);
-        let depth = self.channels == 4;
-        let (fw, fh) = (frame.width, frame.height);
-        if (w, h) == (fw, fh) {
-            for (i, px) in frame.rgb.chunks_exact(3).enumerate() {
-                for k in 0..3 {
-                    data[k * n + i] = px[k] as f32 * gain[k] + bias[k];
-                }
-            }
-            if depth {
-                data[3 * n..].copy_from_slice(&frame.depth);
-            }
-            return data;
-        }
-        let (xt, yt) = (bilinear_taps(fw, w), bilinear_taps(fh, h));
-        for (y, &(y0, y1, b)) in yt.iter().enumerate() {
-            for (x, &(x0, x1, a)) in xt.iter().enumerate() {
-                let i = y * w + x;
-                let corners = [
-                    (y0 * fw + x0, (1.0 - a) * (1.0 - b)),
-                    (y0 * fw + x1, a * (1.0 - b)),
-                    (y1 * fw + x0, (1.0 - a) * b),
-                    (y1 * fw + x1, a * b),
-                ];
-                for k in 0..3 {
-                    let v: f32 = corners
-                        .iter()
-                        .map(|&(j, wt)| wt * frame.rgb[3 * j + k] as f32)
-                        .sum();
-                    data[k * n + i] = v * gain[k] + bias[k];
-                }
-                if depth {
-                    // Only valid readings are interpolated: mixing in the 0 of a missing one
-                    // would invent depths between the object and nothing.
-                    let (mut sum, mut wsum) = (0.0f32, 0.0f32);
-                    for &(j, wt) in &corners {
-                        let d = frame.depth[j];
-                        if d > 0.0 && wt > 0.0 {
-                            sum += wt * d;
-                            wsum += wt;
-                        }
-                    }
-                    data[3 * n + i] = if wsum > 0.0 { sum / wsum } else { 0.0 };
-                }
+        for (k, plane) in data[..3 * n].chunks_exact_mut(n).enumerate() {
+            let gain = 1.0 / (255.0 * self.std[k]);
+            let bias = -self.mean[k] / self.std[k];
+            for x in plane {
+                *x = *x * gain + bias;
             }
         }
         data
     }
+}
+
+/// The frame as the network sees it before colour normalisation: planes R, G, B (0…255) and,
+/// with `depth`, metres (0 where invalid), resized to `w` × `h` by bilinear interpolation
+/// where the size differs (model contract). Public so that training data is made by exactly
+/// this code (models/grasp_type).
+pub fn resized_planes(frame: &DecodedFrame, w: usize, h: usize, depth: bool) -> Vec<f32> {
+    let n = w * h;
+    let channels = if depth { 4 } else { 3 };
+    let mut data = vec![0.0f32; channels * n];
+    let (fw, fh) = (frame.width, frame.height);
+    if (w, h) == (fw, fh) {
+        for (i, px) in frame.rgb.chunks_exact(3).enumerate() {
+            for k in 0..3 {
+                data[k * n + i] = px[k] as f32;
+            }
+        }
+        if depth {
+            data[3 * n..].copy_from_slice(&frame.depth);
+        }
+        return data;
+    }
+    let (xt, yt) = (bilinear_taps(fw, w), bilinear_taps(fh, h));
+    for (y, &(y0, y1, b)) in yt.iter().enumerate() {
+        for (x, &(x0, x1, a)) in xt.iter().enumerate() {
+            let i = y * w + x;
+            let corners = [
+                (y0 * fw + x0, (1.0 - a) * (1.0 - b)),
+                (y0 * fw + x1, a * (1.0 - b)),
+                (y1 * fw + x0, (1.0 - a) * b),
+                (y1 * fw + x1, a * b),
+            ];
+            for k in 0..3 {
+                data[k * n + i] = corners
+                    .iter()
+                    .map(|&(j, wt)| wt * frame.rgb[3 * j + k] as f32)
+                    .sum();
+            }
+            if depth {
+                // Only valid readings are interpolated: mixing in the 0 of a missing one
+                // would invent depths between the object and nothing.
+                let (mut sum, mut wsum) = (0.0f32, 0.0f32);
+                for &(j, wt) in &corners {
+                    let d = frame.depth[j];
+                    if d > 0.0 && wt > 0.0 {
+                        sum += wt * d;
+                        wsum += wt;
+                    }
+                }
+                data[3 * n + i] = if wsum > 0.0 { sum / wsum } else { 0.0 };
+            }
+        }
+    }
+    data
 }
 
 fn sigmoid(x: f32) -> f32 {

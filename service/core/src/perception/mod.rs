@@ -29,7 +29,7 @@ pub mod segmentation;
 pub use depth_to_cloud::{CloudFrame, PixelCloud, back_project, depth_to_cloud};
 pub use grasp_type_detection::{
     GraspTypeModel, ModelError, TypeMaps, attention_pixel, choose_type, init_onnx_runtime,
-    type_probabilities,
+    resized_planes, type_probabilities,
 };
 pub use information::{
     GraspInformation, InformationParams, PerceptionReport, PerceptionTimings, ProbabilityMaps,

@@ -1,0 +1,103 @@
+//! Generated RGB-D tabletop scenes with per-pixel grasp-type labels for training graspd's
+//! grasp-type network (models/grasp_type/MODEL_CARD.md): [`scene`] draws and ray-casts them,
+//! [`labels`] is the label rule set (LABELS.md), [`sample`] turns scene i of a seed into the
+//! network's input exactly as graspd preprocesses a frame.
+
+pub mod labels;
+pub mod scene;
+
+use graspd_core::perception::{CameraIntrinsics, DecodedFrame, resized_planes};
+pub use scene::{Frame, Scene};
+
+/// Source rows (or columns) that a bilinear resize from `src` to `dst` reads, and the one the
+/// nearest-pixel label comes from (the taps of graspd's resize, model contract).
+pub fn needed(src: usize, dst: usize) -> Vec<bool> {
+    let mut need = vec![src == dst; src];
+    let r = src as f64 / dst as f64;
+    for o in 0..dst {
+        let s = ((o as f64 + 0.5) * r - 0.5).clamp(0.0, (src - 1) as f64);
+        let i0 = s.floor() as usize;
+        need[i0] = true;
+        need[(i0 + 1).min(src - 1)] = true;
+        need[label_source(o, r, src)] = true;
+    }
+    need
+}
+
+/// The source pixel whose label a model pixel takes (its centre's pixel).
+pub fn label_source(o: usize, r: f64, src: usize) -> usize {
+    (((o as f64 + 0.5) * r) as usize).min(src - 1)
+}
+
+/// One scene as the network sees it.
+pub struct Sample {
+    /// [4, h, w]: R, G, B (0…255) and depth (m), as `resized_planes` makes them.
+    pub x: Vec<f32>,
+    /// [h, w] label bytes.
+    pub y: Vec<u8>,
+    /// The full frame, when asked for.
+    pub full: Option<Frame>,
+    /// The full frame as graspd decodes it (only the pixels the resize reads are rendered
+    /// unless `full`).
+    pub decoded: DecodedFrame,
+}
+
+/// Scene `i` of the data set with `seed` (drawn from seed `seed · 1 000 003 + i`), at model input
+/// size `width` × `height`; `full` renders every pixel and keeps the frame.
+pub fn sample(
+    seed: u64,
+    i: usize,
+    width: usize,
+    height: usize,
+    full: bool,
+) -> Result<Sample, String> {
+    let scene = Scene::random(seed.wrapping_mul(1_000_003).wrapping_add(i as u64))
+        .map_err(|e| e.to_string())?;
+    let k = scene.camera.intrinsics;
+    let (rows, cols) = if full {
+        (vec![true; k.height], vec![true; k.width])
+    } else {
+        (needed(k.height, height), needed(k.width, width))
+    };
+    let mut frame = scene.render(&rows, &cols);
+    let decoded = DecodedFrame {
+        width: frame.width,
+        height: frame.height,
+        rgb: if full {
+            frame.rgb.clone()
+        } else {
+            std::mem::take(&mut frame.rgb)
+        },
+        depth: if full {
+            frame.depth.clone()
+        } else {
+            std::mem::take(&mut frame.depth)
+        },
+        intrinsics: CameraIntrinsics {
+            fx: k.fx,
+            fy: k.fy,
+            cx: k.cx,
+            cy: k.cy,
+        },
+        camera_to_world: Some(frame.camera_to_world),
+        valid_depth: frame.depth.iter().filter(|d| **d > 0.0).count(),
+    };
+    let x = resized_planes(&decoded, width, height, true);
+    let (rx, ry) = (
+        frame.width as f64 / width as f64,
+        frame.height as f64 / height as f64,
+    );
+    let mut y = Vec::with_capacity(width * height);
+    for v in 0..height {
+        let sv = label_source(v, ry, frame.height);
+        for u in 0..width {
+            y.push(frame.labels[sv * frame.width + label_source(u, rx, frame.width)]);
+        }
+    }
+    Ok(Sample {
+        x,
+        y,
+        full: full.then_some(frame),
+        decoded,
+    })
+}

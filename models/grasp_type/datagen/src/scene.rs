@@ -1,0 +1,513 @@
+//! Random tabletop scenes and their ray-cast RGB-D frames with per-pixel grasp-type labels.
+//!
+//! A scene is 1–5 objects on a table: YCB meshes from the shared test data and procedural
+//! primitives (standing and lying cylinders, boxes, thin plates, spheres, small items, thin
+//! rods, and bodies with a handle), each with a random pose, size, two colours and a texture (plain, stripes, checker,
+//! blotches). One directional light with ambient, diffuse and specular terms, a random table
+//! colour and texture, a random background, a camera 0.35–0.85 m from the objects' centroid at 25–80° elevation and any
+//! azimuth, f = 500–620 px. Depth gets Gaussian noise and dropouts like a structured-light
+//! sensor. Every object pixel is labelled by [`crate::labels`].
+
+use crate::labels::{PartDims, PartLabels, part_labels};
+use graspd_testkit::{Camera, Object, mesh};
+use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use parry3d_f64::math::Vector;
+use parry3d_f64::query::Ray;
+use parry3d_f64::shape::{Ball, Cuboid, Cylinder, Shape};
+use rand::{Rng, RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::f64::consts::{FRAC_PI_2, TAU};
+use std::sync::Arc;
+
+/// How a surface is coloured between its two colours.
+#[derive(Debug, Clone, Copy)]
+enum Texture {
+    Plain,
+    /// Bands along a local axis, `period` m.
+    Stripes {
+        axis: Vector3<f64>,
+        period: f64,
+    },
+    Checker {
+        size: f64,
+    },
+    /// Value noise on a grid of `size` m.
+    Blotches {
+        size: f64,
+    },
+}
+
+impl Texture {
+    fn random(rng: &mut ChaCha8Rng) -> Self {
+        match rng.random_range(0..4) {
+            0 => Texture::Plain,
+            1 => Texture::Stripes {
+                axis: random_unit(rng),
+                period: rng.random_range(0.005..0.06),
+            },
+            2 => Texture::Checker {
+                size: rng.random_range(0.005..0.04),
+            },
+            _ => Texture::Blotches {
+                size: rng.random_range(0.004..0.03),
+            },
+        }
+    }
+
+    /// Weight of the second colour at local point `p`, 0…1.
+    fn weight(&self, p: &Point3<f64>) -> f64 {
+        match *self {
+            Texture::Plain => 0.0,
+            Texture::Stripes { axis, period } => {
+                if (p.coords.dot(&axis) / period).rem_euclid(1.0) < 0.5 {
+                    0.0
+                } else {
+                    1.0
+                }
+            }
+            Texture::Checker { size } => {
+                let s = (p.x / size).floor() + (p.y / size).floor() + (p.z / size).floor();
+                (s as i64).rem_euclid(2) as f64
+            }
+            Texture::Blotches { size } => {
+                let c = p.coords / size;
+                hash3(c.x.floor() as i64, c.y.floor() as i64, c.z.floor() as i64)
+            }
+        }
+    }
+}
+
+/// A hash of a grid cell to [0, 1).
+fn hash3(i: i64, j: i64, k: i64) -> f64 {
+    let mut h = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (j as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+        ^ (k as u64).wrapping_mul(0x1656_67B1_9E37_79F9);
+    h ^= h >> 31;
+    h = h.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    h ^= h >> 29;
+    (h >> 11) as f64 / (1u64 << 53) as f64
+}
+
+fn random_unit(rng: &mut ChaCha8Rng) -> Vector3<f64> {
+    loop {
+        let v = Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        let n = v.norm();
+        if n > 0.1 && n <= 1.0 {
+            return v / n;
+        }
+    }
+}
+
+fn random_color(rng: &mut ChaCha8Rng) -> [f64; 3] {
+    [
+        rng.random_range(15.0..250.0),
+        rng.random_range(15.0..250.0),
+        rng.random_range(15.0..250.0),
+    ]
+}
+
+/// One rigid part of an object.
+struct Part {
+    shape: Arc<dyn Shape>,
+    /// Local → world.
+    pose: Isometry3<f64>,
+    inverse: Isometry3<f64>,
+    /// World bounding sphere, for a cheap rejection per ray.
+    center: Point3<f64>,
+    radius: f64,
+    colors: [[f64; 3]; 2],
+    texture: Texture,
+    labels: PartLabels,
+}
+
+impl Part {
+    fn new(
+        shape: Arc<dyn Shape>,
+        pose: Isometry3<f64>,
+        dims: PartDims,
+        colors: [[f64; 3]; 2],
+        texture: Texture,
+    ) -> Self {
+        let bs = shape.compute_local_bounding_sphere();
+        let c = bs.center();
+        Self {
+            center: pose * Point3::new(c.x, c.y, c.z),
+            radius: bs.radius(),
+            inverse: pose.inverse(),
+            labels: part_labels(&dims),
+            shape,
+            pose,
+            colors,
+            texture,
+        }
+    }
+
+    /// Distance along the world ray and the world normal of the first hit.
+    fn cast(&self, o: &Point3<f64>, dir: &Vector3<f64>, max: f64) -> Option<(f64, Vector3<f64>)> {
+        // Ray–sphere rejection.
+        let oc = self.center - o;
+        let along = oc.dot(dir);
+        if oc.norm_squared() - along * along > self.radius * self.radius {
+            return None;
+        }
+        let lo = self.inverse * o;
+        let ld = self.inverse.rotation * dir;
+        let ray = Ray::new(Vector::new(lo.x, lo.y, lo.z), Vector::new(ld.x, ld.y, ld.z));
+        let hit = self.shape.cast_local_ray_and_get_normal(&ray, max, true)?;
+        let n = self.pose.rotation * Vector3::new(hit.normal.x, hit.normal.y, hit.normal.z);
+        Some((hit.time_of_impact, n))
+    }
+}
+
+/// A random scene.
+pub struct Scene {
+    parts: Vec<Part>,
+    table_half_extent: f64,
+    table_colors: [[f64; 3]; 2],
+    table_texture: Texture,
+    background: [f64; 3],
+    light: Vector3<f64>,
+    ambient: f64,
+    diffuse: f64,
+    specular: f64,
+    shininess: i32,
+    pub camera: Camera,
+    depth_noise_sigma: f64,
+    dropout: f64,
+    noise_seed: u64,
+}
+
+/// The pose of a part standing at (x, y) turned by `yaw`, its local frame lifted by `z`.
+fn placed(x: f64, y: f64, z: f64, yaw: f64, tilt: UnitQuaternion<f64>) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::new(x, y, z),
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw) * tilt,
+    )
+}
+
+impl Scene {
+    /// Draws a scene from `seed` (the same seed gives the same scene).
+    pub fn random(seed: u64) -> graspd_testkit::Result<Self> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let count = rng.random_range(1..=5usize);
+        let mut parts = Vec::new();
+        // Footprint circles (x, y, r) of the objects placed so far.
+        let mut placed_at: Vec<(f64, f64, f64)> = Vec::new();
+        for _ in 0..count {
+            let object = random_object(&mut rng)?;
+            let r = object.footprint;
+            let spot = (0..60).find_map(|_| {
+                let (x, y) = (rng.random_range(-0.18..0.18), rng.random_range(-0.18..0.18));
+                placed_at
+                    .iter()
+                    .all(|&(px, py, pr)| {
+                        ((x - px).powi(2) + (y - py).powi(2)).sqrt() > r + pr + 0.01
+                    })
+                    .then_some((x, y))
+            });
+            let Some((x, y)) = spot else { continue };
+            placed_at.push((x, y, r));
+            let yaw = rng.random_range(0.0..TAU);
+            let base = placed(x, y, 0.0, yaw, UnitQuaternion::identity());
+            for (shape, local, dims) in object.parts {
+                let colors = [random_color(&mut rng), random_color(&mut rng)];
+                let texture = Texture::random(&mut rng);
+                parts.push(Part::new(shape, base * local, dims, colors, texture));
+            }
+        }
+        // Look at the objects' centroid (or the table centre when none fits).
+        let n = placed_at.len().max(1) as f64;
+        let (cx, cy) = placed_at
+            .iter()
+            .fold((0.0, 0.0), |(x, y), p| (x + p.0 / n, y + p.1 / n));
+        let target = Point3::new(
+            cx + rng.random_range(-0.05..0.05),
+            cy + rng.random_range(-0.05..0.05),
+            rng.random_range(0.0..0.08),
+        );
+        let mut camera = Camera::orbit(
+            target,
+            rng.random_range(0.35..0.85),
+            rng.random_range(25.0..80.0),
+            rng.random_range(0.0..360.0),
+        );
+        let f = rng.random_range(500.0..620.0);
+        camera.intrinsics.fx = f;
+        camera.intrinsics.fy = f * rng.random_range(0.99..1.01);
+        camera.intrinsics.cx = 319.5 + rng.random_range(-6.0..6.0);
+        camera.intrinsics.cy = 239.5 + rng.random_range(-6.0..6.0);
+        let light = {
+            let az = rng.random_range(0.0..TAU);
+            let el = rng.random_range(0.3..FRAC_PI_2);
+            Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin())
+        };
+        Ok(Self {
+            parts,
+            table_half_extent: rng.random_range(0.3..0.8),
+            table_colors: [random_color(&mut rng), random_color(&mut rng)],
+            table_texture: Texture::random(&mut rng),
+            background: random_color(&mut rng).map(|c| c * 0.5),
+            light,
+            ambient: rng.random_range(0.25..0.55),
+            diffuse: rng.random_range(0.35..0.75),
+            specular: rng.random_range(0.0..0.35),
+            shininess: rng.random_range(4..40),
+            camera,
+            depth_noise_sigma: rng.random_range(0.0005..0.003),
+            dropout: rng.random_range(0.0..0.03),
+            noise_seed: rng.next_u64(),
+        })
+    }
+
+    /// A uniform draw in [0, 1) for pixel `i`, stream `k`: a hash rather than an RNG so that a
+    /// pixel's noise does not depend on which other pixels were cast.
+    fn uniform(&self, i: usize, k: u64, n: u64) -> f64 {
+        hash3(self.noise_seed as i64, i as i64, (4 * k + n) as i64)
+    }
+
+    /// A standard normal draw for pixel `i`, stream `k` (Box–Muller).
+    fn noise(&self, i: usize, k: u64) -> f64 {
+        let u1 = 1.0 - self.uniform(i, k, 1);
+        let u2 = self.uniform(i, k, 2);
+        (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos()
+    }
+
+    /// Ray-casts the frame at the camera's full size. Only rows and columns with `need_row[v]`
+    /// and `need_col[u]` are cast (the others stay black with depth 0 and label 0): a model that
+    /// reads a downsampled frame only ever sees those.
+    pub fn render(&self, need_row: &[bool], need_col: &[bool]) -> Frame {
+        let k = self.camera.intrinsics;
+        let (r, d, f) = self.camera.axes();
+        let rot = Matrix3::from_columns(&[r, d, f]);
+        let o = self.camera.position;
+        let n = k.width * k.height;
+        let mut frame = Frame {
+            width: k.width,
+            height: k.height,
+            rgb: vec![0; 3 * n],
+            depth: vec![0.0; n],
+            labels: vec![0; n],
+            camera_to_world: Isometry3::from_parts(
+                Translation3::from(o.coords),
+                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rot)),
+            ),
+        };
+        for v in (0..k.height).filter(|&v| need_row[v]) {
+            for u in (0..k.width).filter(|&u| need_col[u]) {
+                let i = v * k.width + u;
+                let ray_cam = Vector3::new((u as f64 - k.cx) / k.fx, (v as f64 - k.cy) / k.fy, 1.0);
+                let len = ray_cam.norm();
+                let dir = rot * ray_cam / len;
+                let mut best: Option<(f64, Vector3<f64>, usize)> = None;
+                for (j, p) in self.parts.iter().enumerate() {
+                    let max = best.map_or(10.0, |b| b.0);
+                    if let Some((t, nn)) = p.cast(&o, &dir, max)
+                        && best.is_none_or(|b| t < b.0)
+                    {
+                        best = Some((t, nn, j + 1));
+                    }
+                }
+                if dir.z < -1e-12 {
+                    let t = -o.z / dir.z;
+                    let p = o + dir * t;
+                    let h = self.table_half_extent;
+                    if p.x.abs() <= h && p.y.abs() <= h && best.is_none_or(|b| t < b.0) {
+                        best = Some((t, Vector3::z(), 0));
+                    }
+                }
+                let Some((t, normal, hit)) = best else {
+                    let c = self.background;
+                    frame.rgb[3 * i..3 * i + 3].copy_from_slice(&c.map(|x| x as u8));
+                    continue;
+                };
+                let p = o + dir * t;
+                let (colors, w) = if hit == 0 {
+                    (&self.table_colors, self.table_texture.weight(&p))
+                } else {
+                    let part = &self.parts[hit - 1];
+                    frame.labels[i] = part.labels.at(normal.z);
+                    (&part.colors, part.texture.weight(&(part.inverse * p)))
+                };
+                // Shade with the normal facing the camera.
+                let nn = if normal.dot(&dir) > 0.0 {
+                    -normal
+                } else {
+                    normal
+                };
+                let lambert = nn.dot(&self.light).max(0.0);
+                let reflect = 2.0 * nn.dot(&self.light) * nn - self.light;
+                let spec = self.specular * reflect.dot(&-dir).max(0.0).powi(self.shininess);
+                let light = self.ambient + self.diffuse * lambert;
+                for (c, out) in frame.rgb[3 * i..3 * i + 3].iter_mut().enumerate() {
+                    let base = colors[0][c] * (1.0 - w) + colors[1][c] * w;
+                    let x = base * light + 255.0 * spec + 2.0 * self.noise(i, c as u64);
+                    *out = x.round().clamp(0.0, 255.0) as u8;
+                }
+                let drop = self.uniform(i, 3, 0) < self.dropout;
+                let z = t / len + self.depth_noise_sigma * self.noise(i, 4);
+                frame.depth[i] = if drop { 0.0 } else { z as f32 };
+            }
+        }
+        frame
+    }
+}
+
+/// A rendered frame: colour, depth along the optical axis (m, 0 = no reading) and the label
+/// byte of [`crate::labels`] per pixel (0 off objects).
+pub struct Frame {
+    pub width: usize,
+    pub height: usize,
+    pub rgb: Vec<u8>,
+    pub depth: Vec<f32>,
+    pub labels: Vec<u8>,
+    pub camera_to_world: Isometry3<f64>,
+}
+
+/// An object before placement: its parts in the object's frame (origin on the table, z up) and
+/// the radius of its footprint.
+struct ObjectParts {
+    parts: Vec<(Arc<dyn Shape>, Isometry3<f64>, PartDims)>,
+    footprint: f64,
+}
+
+fn cylinder_y_up() -> UnitQuaternion<f64> {
+    // parry's cylinder axis is local y; turn it to z.
+    UnitQuaternion::from_axis_angle(&Vector3::x_axis(), FRAC_PI_2)
+}
+
+fn random_object(rng: &mut ChaCha8Rng) -> graspd_testkit::Result<ObjectParts> {
+    let kind = rng.random_range(0..100);
+    let mut parts: Vec<(Arc<dyn Shape>, Isometry3<f64>, PartDims)> = Vec::new();
+    let footprint: f64;
+    if kind < 30 {
+        let object = Object::ALL[rng.random_range(0..Object::ALL.len())];
+        let m = mesh(object)?;
+        let aabb = m.local_aabb();
+        let (lo, hi) = (aabb.mins, aabb.maxs);
+        let ext = [hi.x - lo.x, hi.y - lo.y, hi.z - lo.z];
+        let shift = Translation3::new(-(lo.x + hi.x) / 2.0, -(lo.y + hi.y) / 2.0, -lo.z);
+        footprint = 0.5 * (ext[0].powi(2) + ext[1].powi(2)).sqrt();
+        let shape: Arc<dyn Shape> = m;
+        parts.push((
+            shape,
+            Isometry3::from_parts(shift, UnitQuaternion::identity()),
+            PartDims::from_extents_m(ext, ext[2]),
+        ));
+    } else if kind < 42 {
+        // Standing cylinder.
+        let (r, h) = (rng.random_range(0.01..0.06), rng.random_range(0.03..0.25));
+        footprint = r;
+        parts.push((
+            Arc::new(Cylinder::new(h / 2.0, r)),
+            Isometry3::from_parts(Translation3::new(0.0, 0.0, h / 2.0), cylinder_y_up()),
+            PartDims::from_extents_m([2.0 * r, 2.0 * r, h], h),
+        ));
+    } else if kind < 52 {
+        // Lying cylinder (axis along local x).
+        let (r, l): (f64, f64) = (rng.random_range(0.008..0.05), rng.random_range(0.06..0.25));
+        footprint = 0.5 * (l * l + 4.0 * r * r).sqrt();
+        parts.push((
+            Arc::new(Cylinder::new(l / 2.0, r)),
+            Isometry3::from_parts(
+                Translation3::new(0.0, 0.0, r),
+                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), FRAC_PI_2),
+            ),
+            PartDims::from_extents_m([2.0 * r, 2.0 * r, l], 2.0 * r),
+        ));
+    } else if kind < 62 {
+        // Box.
+        let e: [f64; 3] = [
+            rng.random_range(0.02..0.16),
+            rng.random_range(0.02..0.16),
+            rng.random_range(0.02..0.16),
+        ];
+        footprint = 0.5 * (e[0] * e[0] + e[1] * e[1]).sqrt();
+        parts.push((
+            Arc::new(Cuboid::new(Vector::new(e[0] / 2.0, e[1] / 2.0, e[2] / 2.0))),
+            Isometry3::translation(0.0, 0.0, e[2] / 2.0),
+            PartDims::from_extents_m(e, e[2]),
+        ));
+    } else if kind < 68 {
+        // Thin plate lying flat.
+        let e: [f64; 3] = [
+            rng.random_range(0.06..0.2),
+            rng.random_range(0.06..0.2),
+            rng.random_range(0.004..0.015),
+        ];
+        footprint = 0.5 * (e[0] * e[0] + e[1] * e[1]).sqrt();
+        parts.push((
+            Arc::new(Cuboid::new(Vector::new(e[0] / 2.0, e[1] / 2.0, e[2] / 2.0))),
+            Isometry3::translation(0.0, 0.0, e[2] / 2.0),
+            PartDims::from_extents_m(e, e[2]),
+        ));
+    } else if kind < 76 {
+        // Sphere.
+        let r = rng.random_range(0.015..0.06);
+        footprint = r;
+        parts.push((
+            Arc::new(Ball::new(r)),
+            Isometry3::translation(0.0, 0.0, r),
+            PartDims::from_extents_m([2.0 * r; 3], 2.0 * r),
+        ));
+    } else if kind < 86 {
+        // A small item (a cap, a die, an eraser): a box or a standing cylinder of 1.5–6 cm.
+        let e: [f64; 3] = [
+            rng.random_range(0.015..0.06),
+            rng.random_range(0.015..0.06),
+            rng.random_range(0.015..0.06),
+        ];
+        footprint = 0.5 * (e[0] * e[0] + e[1] * e[1]).sqrt();
+        let dims = PartDims::from_extents_m(e, e[2]);
+        if rng.random_bool(0.5) {
+            parts.push((
+                Arc::new(Cuboid::new(Vector::new(e[0] / 2.0, e[1] / 2.0, e[2] / 2.0))),
+                Isometry3::translation(0.0, 0.0, e[2] / 2.0),
+                dims,
+            ));
+        } else {
+            let r = e[0] / 2.0;
+            parts.push((
+                Arc::new(Cylinder::new(e[2] / 2.0, r)),
+                Isometry3::from_parts(Translation3::new(0.0, 0.0, e[2] / 2.0), cylinder_y_up()),
+                PartDims::from_extents_m([e[0], e[0], e[2]], e[2]),
+            ));
+        }
+    } else if kind < 93 {
+        // A thin rod lying on the table (a marker, a tool).
+        let (r, l): (f64, f64) = (rng.random_range(0.005..0.018), rng.random_range(0.1..0.25));
+        footprint = l / 2.0;
+        parts.push((
+            Arc::new(Cylinder::new(l / 2.0, r)),
+            Isometry3::from_parts(
+                Translation3::new(0.0, 0.0, r),
+                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), FRAC_PI_2),
+            ),
+            PartDims::from_extents_m([2.0 * r, 2.0 * r, l], 2.0 * r),
+        ));
+    } else {
+        // A body with a horizontal handle (a pot, a pan, a tool).
+        let (r, h) = (rng.random_range(0.03..0.07), rng.random_range(0.04..0.16));
+        let (hr, hl) = (rng.random_range(0.007..0.016), rng.random_range(0.08..0.16));
+        let hz = rng.random_range(0.4..0.9) * h;
+        footprint = r + hl;
+        parts.push((
+            Arc::new(Cylinder::new(h / 2.0, r)),
+            Isometry3::from_parts(Translation3::new(0.0, 0.0, h / 2.0), cylinder_y_up()),
+            PartDims::from_extents_m([2.0 * r, 2.0 * r, h], h),
+        ));
+        // The handle's axis (local y) along x, starting inside the body's wall.
+        parts.push((
+            Arc::new(Cylinder::new(hl / 2.0, hr)),
+            Isometry3::from_parts(
+                Translation3::new(r - 0.005 + hl / 2.0, 0.0, hz.max(hr)),
+                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), FRAC_PI_2),
+            ),
+            PartDims::from_extents_m([2.0 * hr, 2.0 * hr, hl], 2.0 * hr),
+        ));
+    }
+    Ok(ObjectParts { parts, footprint })
+}
