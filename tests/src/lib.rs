@@ -97,6 +97,7 @@ impl Server {
             "GRASPD_TLS_CERT",
             "GRASPD_TLS_KEY",
             "GRASPD_TLS_CLIENT_CA",
+            "GRASPD_TACTILE_MODEL",
         ] {
             command.env_remove(var);
         }

@@ -1,7 +1,10 @@
 //! Tactile stabilization end to end (issue 5): a real BioTac recording streamed over gRPC gets
 //! one setpoint per frame, `POST /v1/tactile/analyze` (CSV and JSON) gives the same results, bad
 //! sessions and frames end the stream with INVALID_ARGUMENT naming the field, and the session
-//! limit refuses the extra session and frees the slot the moment a client disconnects.
+//! limit refuses the extra session and frees the slot the moment a client disconnects. With the
+//! shipped LSTM model (models/tactile) a session reports material probabilities while in contact,
+//! a session asking for a model the server has not loaded is refused naming the field, and a
+//! `--tactile-model` file that does not load stops the start.
 
 use graspd::facade::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
 use graspd::grpc::convert;
@@ -547,4 +550,151 @@ mod websocket {
         assert!(status >= 400, "{status}");
         assert_eq!(code, "websocket_required");
     }
+}
+
+fn repo_root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The ONNX Runtime library for the model tests: `$ORT_DYLIB_PATH` (set by `make test`) or the
+/// one scripts/fetch-onnxruntime.sh writes.
+fn onnxruntime() -> String {
+    std::env::var("ORT_DYLIB_PATH")
+        .ok()
+        .filter(|p| !p.is_empty())
+        .unwrap_or_else(|| {
+            repo_root()
+                .join(".tools/onnxruntime/libonnxruntime.so.1.31.1")
+                .display()
+                .to_string()
+        })
+}
+
+#[tokio::test]
+async fn the_lstm_model_reports_materials_while_in_contact() {
+    let model = repo_root().join("models/tactile/tactile_detector.onnx");
+    let lib = onnxruntime();
+    let server = Server::start_with(&[
+        "--tactile-model",
+        model.to_str().unwrap(),
+        "--onnxruntime",
+        &lib,
+    ]);
+    let mut s = session();
+    s.detector = Some(pb::TactileDetector {
+        kind: Some(pb::tactile_detector::Kind::Model("lstm".into())),
+    });
+    let frames = recording_frames();
+    let (tx, mut rx) = open(&server, s).await.expect("session opens");
+    let sent = frames[..300].to_vec();
+    let sender = tokio::spawn(async move {
+        for f in &sent {
+            tx.send(frame_message(f))
+                .await
+                .expect("the stream stays open");
+        }
+    });
+    let (mut with_material, mut in_contact) = (0, 0);
+    while let Some(m) = rx.message().await.expect("no stream error") {
+        let f = &m.fingers[0];
+        if f.event == pb::ContactEvent::NonContact as i32 {
+            assert!(f.material_probabilities.is_empty());
+            assert_eq!(f.material, pb::Material::Unknown as i32);
+            continue;
+        }
+        in_contact += 1;
+        if f.material_probabilities.len() == 4 {
+            with_material += 1;
+            let sum: f64 = f.material_probabilities.iter().sum();
+            assert!((sum - 1.0).abs() < 1e-6, "{:?}", f.material_probabilities);
+            assert_ne!(f.material, pb::Material::Unknown as i32);
+        }
+    }
+    sender.await.unwrap();
+    assert!(
+        in_contact > 100,
+        "{in_contact} frames in contact of 300 (the sensor is pressed)"
+    );
+    assert_eq!(
+        with_material, in_contact,
+        "every in-contact frame has material probabilities"
+    );
+
+    // The same session through REST analyze, with the detector left to the server's default
+    // (the loaded model): material probabilities too.
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze?pretared=true&finger=th&layout=biotac"))
+        .header("content-type", "text/csv")
+        .body(recording_text())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    let body: serde_json::Value = response.json().await.unwrap();
+    let frames = body["frames"].as_array().unwrap();
+    assert!(
+        frames
+            .iter()
+            .any(|f| f["fingers"][0]["material_probabilities"].is_array()),
+        "the default detector is the loaded model"
+    );
+}
+
+#[tokio::test]
+async fn asking_for_a_model_that_is_not_loaded_names_the_field() {
+    let server = Server::start_with(&["--tactile-model", "none"]);
+    let mut s = session();
+    s.detector = Some(pb::TactileDetector {
+        kind: Some(pb::tactile_detector::Kind::Model("lstm".into())),
+    });
+    let Err(e) = open(&server, s).await else {
+        panic!("a session asking for an unloaded model was opened");
+    };
+    assert_eq!(e.code(), Code::InvalidArgument);
+    assert!(
+        e.message().contains("session.detector.model"),
+        "{}",
+        e.message()
+    );
+    assert!(
+        e.message().contains("no tactile model is loaded"),
+        "{}",
+        e.message()
+    );
+    // Without a model the default is the model-free detector: no materials.
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze?pretared=true&finger=th&layout=biotac"))
+        .header("content-type", "text/csv")
+        .body(recording_text())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    let body: serde_json::Value = response.json().await.unwrap();
+    assert!(
+        body["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|f| f["fingers"][0]["material_probabilities"].is_null())
+    );
+}
+
+#[test]
+fn a_tactile_model_file_that_does_not_load_stops_the_start() {
+    let bad = std::env::temp_dir().join(format!("graspd-bad-tactile-{}.onnx", std::process::id()));
+    std::fs::write(&bad, b"not an onnx model").unwrap();
+    let output = std::process::Command::new(graspd_e2e::binary("graspd", "GRASPD_BIN"))
+        .args(["--grpc-addr", "127.0.0.1:0", "--rest-addr", "127.0.0.1:0"])
+        .args(["--onnxruntime", &onnxruntime(), "--tactile-model"])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_file(&bad);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(
+        stderr.contains("cannot load the tactile model") && stderr.contains("graspd-bad-tactile"),
+        "{stderr}"
+    );
 }

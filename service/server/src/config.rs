@@ -72,6 +72,12 @@ pub struct Cli {
     /// contract stops the start.
     #[arg(long, env = "GRASPD_GRASP_TYPE_MODEL", value_name = "FILE")]
     pub grasp_type_model: Option<PathBuf>,
+    /// The tactile contact/slip/material detector (ONNX, models/tactile/MODEL_CARD.md)
+    /// [default: the copy of models/tactile/tactile_detector.onnx built into graspd; if it cannot
+    /// be loaded (no ONNX Runtime) graspd warns and uses the model-free detector]. `none`: no
+    /// model. A given file that does not load or breaks the contract stops the start.
+    #[arg(long, env = "GRASPD_TACTILE_MODEL", value_name = "FILE")]
+    pub tactile_model: Option<PathBuf>,
     /// libonnxruntime.so (1.31) to load the model with [default: $ORT_DYLIB_PATH].
     #[arg(long, env = "GRASPD_ONNXRUNTIME", value_name = "FILE")]
     pub onnxruntime: Option<PathBuf>,
@@ -136,6 +142,7 @@ pub struct FileConfig {
     pub auth_tokens: Vec<String>,
     pub auth_tokens_file: Option<PathBuf>,
     pub grasp_type_model: Option<PathBuf>,
+    pub tactile_model: Option<PathBuf>,
     pub onnxruntime: Option<PathBuf>,
     pub model_threads: Option<usize>,
     pub log: Option<String>,
@@ -168,6 +175,9 @@ pub struct Settings {
     pub auth_tokens_file: Option<PathBuf>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub grasp_type_model: Option<PathBuf>,
+    /// `None`: the built-in copy; `Some("none")`: no model.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tactile_model: Option<PathBuf>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub onnxruntime: Option<PathBuf>,
     pub model_threads: usize,
@@ -280,6 +290,7 @@ impl Settings {
             auth_tokens,
             auth_tokens_file,
             grasp_type_model: cli.grasp_type_model.clone().or(file.grasp_type_model),
+            tactile_model: cli.tactile_model.clone().or(file.tactile_model),
             onnxruntime: cli.onnxruntime.clone().or(file.onnxruntime),
             model_threads: cli.model_threads.or(file.model_threads).unwrap_or(1),
             log: cli

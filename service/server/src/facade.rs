@@ -10,8 +10,9 @@ use graspd_core::perception::{
 };
 use graspd_core::planning::{KinematicModel, PlaneSource};
 use graspd_core::tactile::{
-    FingerConfig, Frame, FrameResult, LayoutSpec, SensorCatalog, SensorLayout, Stabilizer,
-    StabilizerConfig, TareConfig,
+    DetectorChoice, EventDetector, FingerConfig, Frame, FrameResult, LayoutSpec, LstmDetector,
+    ModelFreeThresholds, SensorCatalog, SensorLayout, Stabilizer, StabilizerConfig, TactileModel,
+    TareConfig,
 };
 use graspd_core::{
     FieldError, GraspPlan, HandCatalog, HandDescription, PlanError, PlanHints, PlanInput,
@@ -264,6 +265,8 @@ struct Inner {
     tactile_sessions: Arc<AtomicUsize>,
     /// The grasp-type network (method.md §4), when configured and loaded.
     grasp_type_model: Option<Arc<GraspTypeModel>>,
+    /// The tactile LSTM detector (method.md §5), when loaded.
+    tactile_model: Option<Arc<TactileModel>>,
 }
 
 /// The hands: descriptions by name, the kinematics of those that have them, and where
@@ -308,6 +311,7 @@ impl GraspService {
                 limits,
                 tactile_sessions: Arc::new(AtomicUsize::new(0)),
                 grasp_type_model: None,
+                tactile_model: None,
             }),
         }
     }
@@ -319,6 +323,19 @@ impl GraspService {
             .expect("the model is set at start, before the service is shared")
             .grasp_type_model = Some(model);
         self
+    }
+
+    /// Sets the tactile detector model (at start, before the service is cloned).
+    pub fn with_tactile_model(mut self, model: Arc<TactileModel>) -> Self {
+        Arc::get_mut(&mut self.inner)
+            .expect("the model is set at start, before the service is shared")
+            .tactile_model = Some(model);
+        self
+    }
+
+    /// The loaded tactile model, if any.
+    pub fn tactile_model(&self) -> Option<&Arc<TactileModel>> {
+        self.inner.tactile_model.as_ref()
     }
 
     /// Whether a grasp-type network is loaded (else the geometric rule decides types).
@@ -791,7 +808,8 @@ impl GraspService {
         request: TactileSessionRequest,
     ) -> Result<TactileSession, ServiceError> {
         let config = self.tactile_config(request)?;
-        let stabilizer = Stabilizer::new(config)?;
+        let detectors = self.detectors(&config)?;
+        let stabilizer = Stabilizer::with_detectors(config, detectors)?;
         let slot = self.take_tactile_slot()?;
         Ok(TactileSession {
             stabilizer,
@@ -808,10 +826,68 @@ impl GraspService {
         frames: &[Frame],
     ) -> Result<Vec<FrameResult>, ServiceError> {
         let config = self.tactile_config(request)?;
+        let detectors = self.detectors(&config)?;
         let _slot = self.take_tactile_slot()?;
         guarded("the stabilizer", || {
-            graspd_core::tactile::analyze(config, frames).map_err(ServiceError::from)
+            graspd_core::tactile::analyze_with_detectors(config, detectors, frames)
+                .map_err(ServiceError::from)
         })
+    }
+
+    /// One detector per finger for a validated config: `model`/`lstm` needs the loaded model
+    /// and a session that fits it (errors name the field); the default takes the model when
+    /// the session fits it, else the model-free detector.
+    fn detectors(
+        &self,
+        config: &StabilizerConfig,
+    ) -> Result<Vec<Box<dyn EventDetector>>, ServiceError> {
+        let model_free = |t: ModelFreeThresholds| -> Vec<Box<dyn EventDetector>> {
+            config
+                .fingers
+                .iter()
+                .map(|_| {
+                    Box::new(graspd_core::tactile::ModelFreeDetector::new(t))
+                        as Box<dyn EventDetector>
+                })
+                .collect()
+        };
+        let with_model = |m: &Arc<TactileModel>| -> Vec<Box<dyn EventDetector>> {
+            config
+                .fingers
+                .iter()
+                .map(|_| Box::new(LstmDetector::new(m.clone())) as Box<dyn EventDetector>)
+                .collect()
+        };
+        let model = self.inner.tactile_model.as_ref();
+        match &config.detector {
+            DetectorChoice::ModelFree(t) => Ok(model_free(*t)),
+            DetectorChoice::Default => Ok(match model {
+                Some(m) if tactile_fit(config, m).is_ok() => with_model(m),
+                _ => model_free(ModelFreeThresholds::default()),
+            }),
+            DetectorChoice::Model(name) => {
+                let wanted = name.trim().to_ascii_lowercase();
+                if wanted != "lstm" && wanted != "model" {
+                    return Err(FieldError::new(
+                        "session.detector.model",
+                        format!(
+                            "unknown model '{}'; the learned detector is 'lstm' (or 'model')",
+                            name.escape_debug()
+                        ),
+                    )
+                    .into());
+                }
+                let m = model.ok_or_else(|| {
+                    FieldError::new(
+                        "session.detector.model",
+                        "no tactile model is loaded on this server (start graspd with \
+                         --tactile-model FILE, or use model_free)",
+                    )
+                })?;
+                tactile_fit(config, m)?;
+                Ok(with_model(m))
+            }
+        }
     }
 
     /// Tactile sessions open now.
@@ -833,6 +909,48 @@ impl GraspService {
             })?;
         Ok(SessionSlot(count.clone()))
     }
+}
+
+/// Whether a session fits the tactile model: its window and stride, and every finger's
+/// electrode count.
+fn tactile_fit(config: &StabilizerConfig, m: &TactileModel) -> Result<(), FieldError> {
+    if config.window_length != m.window_length() {
+        return Err(FieldError::new(
+            "session.window_length",
+            format!(
+                "the tactile model was trained on windows of {}; got {} (use model_free for \
+                 other windows)",
+                m.window_length(),
+                config.window_length
+            ),
+        ));
+    }
+    if config.stride != m.stride() {
+        return Err(FieldError::new(
+            "session.stride",
+            format!(
+                "the tactile model was trained with stride {}; got {} (use model_free \
+                 for other strides)",
+                m.stride(),
+                config.stride
+            ),
+        ));
+    }
+    for (i, f) in config.fingers.iter().enumerate() {
+        if f.layout.electrode_count() != m.electrode_count() {
+            return Err(FieldError::new(
+                format!("session.fingers[{i}].layout"),
+                format!(
+                    "layout {} has {} electrodes; the tactile model reads {} (a classic \
+                     BioTac); use model_free for this finger's sensor",
+                    f.layout.name,
+                    f.layout.electrode_count(),
+                    m.electrode_count()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Runs `f`, turning a panic into `Internal` so that one bad input cannot take a task down.

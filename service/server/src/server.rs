@@ -8,6 +8,7 @@ use crate::runner::PlanRunner;
 use crate::tls::{Tls, TlsError};
 use crate::{grpc, rest};
 use graspd_core::perception::{GraspTypeModel, init_onnx_runtime};
+use graspd_core::tactile::{TactileModel, TactileModelError};
 use std::future::Future;
 use std::io::Write;
 use std::net::SocketAddr;
@@ -50,6 +51,57 @@ async fn bind(what: &'static str, addr: SocketAddr) -> Result<TcpListener, Serve
         .map_err(|source| ServeError::Bind { what, addr, source })
 }
 
+/// The shipped tactile detector (models/tactile/tactile_detector.onnx, a few hundred KB), built
+/// into the binary so that a bare `graspd` has it.
+const EMBEDDED_TACTILE_MODEL: &[u8] =
+    include_bytes!("../../../models/tactile/tactile_detector.onnx");
+const EMBEDDED_TACTILE_NAME: &str = "built-in models/tactile/tactile_detector.onnx";
+
+/// Loads the tactile model: a configured file must load (else the start fails); the built-in
+/// copy is loaded when none is configured, and if that fails (e.g. no ONNX Runtime) graspd warns
+/// and sessions use the model-free detector; `none` loads nothing.
+fn with_tactile_model(
+    service: GraspService,
+    settings: &Settings,
+) -> Result<GraspService, ServeError> {
+    let load = |path: Option<&std::path::Path>| {
+        tokio::task::block_in_place(|| {
+            init_onnx_runtime(settings.onnxruntime.as_deref())
+                .map_err(TactileModelError::Runtime)?;
+            match path {
+                Some(p) => TactileModel::load(p),
+                None => TactileModel::from_bytes(EMBEDDED_TACTILE_MODEL, EMBEDDED_TACTILE_NAME),
+            }
+        })
+    };
+    let model = match settings.tactile_model.as_deref() {
+        Some(p) if p.as_os_str() == "none" => {
+            tracing::info!("no tactile model (--tactile-model none): model-free detector");
+            return Ok(service);
+        }
+        Some(path) => load(Some(path)).map_err(|e| ServeError::Model(e.to_string()))?,
+        None => match load(None) {
+            Ok(m) => m,
+            Err(e) => {
+                tracing::warn!(
+                    error = %e,
+                    "the built-in tactile model is not loaded; tactile sessions use the \
+                     model-free detector"
+                );
+                return Ok(service);
+            }
+        },
+    };
+    tracing::info!(
+        source = model.source_name(),
+        window = model.window_length(),
+        stride = model.stride(),
+        electrodes = model.electrode_count(),
+        "tactile model loaded"
+    );
+    Ok(service.with_tactile_model(Arc::new(model)))
+}
+
 /// Binds both listeners, prints `graspd listening grpc=ADDR rest=ADDR` on stdout (tests read
 /// it to find ephemeral ports), serves until `shutdown` completes, then drains both.
 pub async fn run(
@@ -77,6 +129,7 @@ pub async fn run(
             service.with_grasp_type_model(Arc::new(model))
         }
     };
+    let service = with_tactile_model(service, settings)?;
     // TLS files next: one that cannot be read, or a key that does not match, fails the start.
     let tls = settings.tls_files().map(|f| Tls::load(&f)).transpose()?;
     let grpc_listener = bind("gRPC", settings.grpc_addr).await?;

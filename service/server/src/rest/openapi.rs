@@ -480,7 +480,7 @@ doc_schema!(
                 .additional_properties(Some(AdditionalProperties::FreeForm(false)))
         )
         .description(Some(
-            "{\"model_free\": {thresholds}} or {\"model\": \"name\"} (no learned detector ships yet: 400)"
+            "{\"model_free\": {thresholds}} or {\"model\": \"lstm\"} (the learned LSTM detector of models/tactile; 400 when none is loaded or the session does not fit it). Absent: the loaded model when the session fits it, else model_free with default thresholds"
         ))
     )
 );
