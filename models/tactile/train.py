@@ -239,6 +239,7 @@ def main():
     import onnxruntime as ort
 
     head = ExportHead(net).eval()
+    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
     dummy = torch.from_numpy(xtn[:1])
     torch.onnx.export(head, (dummy,), args.out, input_names=["window"],
                       output_names=["event_logits", "material_logits"], opset_version=17, dynamo=False)

@@ -2,16 +2,23 @@
 //! estimation, PID), single thread: p50, p99 and frames/s for 1 and 3 classic-BioTac fingers on a
 //! synthetic raw stream (baseline, press, slide with pac vibration), and for one finger on the
 //! real BioTac recordings of ../shared/testdata/tactile (pre-tared; the GMM's EM needs more
-//! iterations on their images than on the synthetic ones).
+//! iterations on their images than on the synthetic ones). Each case runs twice: with the
+//! model-free detector and with the shipped LSTM model (models/tactile/tactile_detector.onnx,
+//! ONNX Runtime from `$ORT_DYLIB_PATH` or .tools/onnxruntime; skipped when neither exists). The
+//! model runs on every k-th frame (k = 3), so its cost per frame is about a third of a run.
 //! `cargo bench -p graspd-core --bench tactile_frame`.
 
-use graspd_core::tactile::Recording;
+use graspd_core::perception::init_onnx_runtime;
+use graspd_core::tactile::detector::EventDetector;
 use graspd_core::tactile::layout::SensorLayout;
 use graspd_core::tactile::stabilizer::{
     FingerConfig, FingerReading, Frame, Stabilizer, StabilizerConfig,
 };
 use graspd_core::tactile::taring::TareConfig;
+use graspd_core::tactile::{LstmDetector, Recording, TactileModel};
 use std::hint::black_box;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 fn reading(i: usize) -> FingerReading {
@@ -36,7 +43,7 @@ fn reading(i: usize) -> FingerReading {
     }
 }
 
-fn run(fingers: usize, frames: usize) {
+fn run(fingers: usize, frames: usize, model: Option<&Arc<TactileModel>>) {
     let input: Vec<Frame> = (0..frames)
         .map(|i| Frame {
             timestamp: i as f64 * 0.01,
@@ -48,11 +55,12 @@ fn run(fingers: usize, frames: usize) {
         fingers,
         TareConfig::default(),
         &input,
+        model,
     );
 }
 
 /// One finger over the real recordings (every `mat*/mat*_1_bio.csv`), one after the other.
-fn run_recordings(limit: usize) {
+fn run_recordings(limit: usize, model: Option<&Arc<TactileModel>>) {
     let dir = graspd_testkit::testdata_dir().join("tactile/biotac_slide");
     let Ok(entries) = std::fs::read_dir(&dir) else {
         println!(
@@ -83,10 +91,16 @@ fn run_recordings(limit: usize) {
     }
     input.truncate(limit);
     let label = format!("1 finger, {} real recordings", paths.len());
-    measure(&label, 1, TareConfig::pretared(), &input);
+    measure(&label, 1, TareConfig::pretared(), &input, model);
 }
 
-fn measure(label: &str, fingers: usize, tare: TareConfig, input: &[Frame]) {
+fn measure(
+    label: &str,
+    fingers: usize,
+    tare: TareConfig,
+    input: &[Frame],
+    model: Option<&Arc<TactileModel>>,
+) {
     let config = StabilizerConfig::for_fingers(
         (0..fingers)
             .map(|f| FingerConfig {
@@ -96,7 +110,23 @@ fn measure(label: &str, fingers: usize, tare: TareConfig, input: &[Frame]) {
             })
             .collect(),
     );
-    let mut stab = Stabilizer::new(config).unwrap();
+    let mut stab = match model {
+        None => Stabilizer::new(config).unwrap(),
+        Some(m) => {
+            let detectors = (0..fingers)
+                .map(|_| Box::new(LstmDetector::new(m.clone())) as Box<dyn EventDetector>)
+                .collect();
+            Stabilizer::with_detectors(config, detectors).unwrap()
+        }
+    };
+    let label = format!(
+        "{label}, {}",
+        if model.is_some() {
+            "LSTM model"
+        } else {
+            "model-free"
+        }
+    );
     let frames = input.len();
     let mut lat = Vec::with_capacity(frames);
     let all = Instant::now();
@@ -121,8 +151,29 @@ fn main() {
     // `cargo bench` passes `--bench`; `cargo test --benches` runs a short smoke pass.
     let quick = !std::env::args().any(|a| a == "--bench");
     let frames = if quick { 2_000 } else { 50_000 };
-    for fingers in [1, 3] {
-        run(fingers, frames);
+    let model = load_model();
+    if model.is_none() {
+        println!("LSTM model cases skipped: no ONNX Runtime library");
     }
-    run_recordings(frames);
+    for m in std::iter::once(None).chain(model.as_ref().map(Some)) {
+        for fingers in [1, 3] {
+            run(fingers, frames, m);
+        }
+        run_recordings(frames, m);
+    }
+}
+
+fn load_model() -> Option<Arc<TactileModel>> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let lib = std::env::var_os("ORT_DYLIB_PATH")
+        .filter(|p| !p.is_empty())
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join(".tools/onnxruntime/libonnxruntime.so.1.31.1"));
+    if !lib.is_file() {
+        return None;
+    }
+    init_onnx_runtime(Some(&lib)).expect("ONNX Runtime loads");
+    let m = TactileModel::load(&root.join("models/tactile/tactile_detector.onnx"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    Some(Arc::new(m))
 }
