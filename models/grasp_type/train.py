@@ -256,7 +256,7 @@ def main():
     ap.add_argument("--out", default=str(Path(__file__).parent), help="folder for grasp_type.onnx and metrics")
     ap.add_argument("--width", type=int, default=160)
     ap.add_argument("--height", type=int, default=120)
-    ap.add_argument("--epochs", type=int, default=12)
+    ap.add_argument("--epochs", type=int, default=20)
     ap.add_argument("--batch", type=int, default=16)
     ap.add_argument("--lr", type=float, default=3e-3)
     ap.add_argument("--threads", type=int, default=2)

@@ -53,6 +53,21 @@ fn grpc_request(frame: pb::RgbdFrame, pixel: Option<(u32, u32)>) -> pb::PlanGras
     }
 }
 
+/// Plans `frame` over gRPC (hinted at `pixel`) and returns the response.
+async fn plan_frame(
+    server: &Server,
+    frame: pb::RgbdFrame,
+    pixel: Option<(u32, u32)>,
+) -> pb::PlanGraspResponse {
+    server
+        .grpc()
+        .await
+        .plan_grasp(grpc_request(frame, pixel))
+        .await
+        .unwrap()
+        .into_inner()
+}
+
 fn intrinsics_json(r: &RgbdRender) -> serde_json::Value {
     json!({"fx": r.intrinsics.fx, "fy": r.intrinsics.fy, "cx": r.intrinsics.cx, "cy": r.intrinsics.cy})
 }
@@ -102,8 +117,8 @@ fn assert_plan_on_the_can(plan: &GraspPlan, r: &RgbdRender, what: &str) {
     );
     assert_eq!(
         plan.type_source,
-        graspd_core::planning::TypeSource::GeometricRule,
-        "{what}: no model is configured"
+        graspd_core::planning::TypeSource::Model,
+        "{what}: the built-in grasp-type model decides by default"
     );
     let d = r.distance_to_object(0, &plan.attention_point);
     assert!(d <= 0.003, "{what}: attention point {d} m off the can");
@@ -132,13 +147,7 @@ async fn an_rgbd_frame_plans_the_hinted_object_alike_over_grpc_and_rest() {
     let server = Server::start();
     let r = scene();
     let pixel = r.object_pixel(0);
-    let grpc = server
-        .grpc()
-        .await
-        .plan_grasp(grpc_request(rgbd_frame_proto(r, true), Some(pixel)))
-        .await
-        .unwrap()
-        .into_inner();
+    let grpc = plan_frame(&server, rgbd_frame_proto(r, true), Some(pixel)).await;
     assert!(grpc.attention.as_ref().unwrap().pixel.is_some());
     let grpc = plan_from_proto(grpc).unwrap();
     assert_plan_on_the_can(&grpc, r, "gRPC");
@@ -168,16 +177,48 @@ async fn an_rgbd_frame_plans_the_hinted_object_alike_over_grpc_and_rest() {
     }
 
     // Without a hint the most salient object is the target, and no attention pixel is reported.
-    let plan = server
-        .grpc()
-        .await
-        .plan_grasp(grpc_request(rgbd_frame_proto(r, true), None))
-        .await
-        .unwrap()
-        .into_inner();
+    let plan = plan_frame(&server, rgbd_frame_proto(r, true), None).await;
     let p = plan.perception.unwrap();
     assert_eq!(p.target_source, "saliency");
-    assert!(plan.attention.unwrap().pixel.is_none());
+    // The built-in model places the attention pixel by mean shift on map s* inside the ROI.
+    let a = plan
+        .attention
+        .unwrap()
+        .pixel
+        .expect("an attention pixel from the model");
+    let roi = p.roi.unwrap();
+    assert!(
+        (roi.u_min..=roi.u_max).contains(&a.u) && (roi.v_min..=roi.v_max).contains(&a.v),
+        "{a:?} outside {roi:?}"
+    );
+}
+
+#[tokio::test]
+async fn without_onnx_runtime_or_with_model_none_the_geometric_rule_decides() {
+    let r = scene();
+    let pixel = r.object_pixel(0);
+    for (args, warning) in [
+        (
+            &["--onnxruntime", "/nonexistent/libonnxruntime.so.1.31.1"][..],
+            Some("the built-in grasp-type model is not loaded"),
+        ),
+        (&["--grasp-type-model", "none"][..], None),
+    ] {
+        let server = Server::start_with_logs(&[args, &["--log", "info"]].concat());
+        let plan = plan_frame(&server, rgbd_frame_proto(r, true), Some(pixel)).await;
+        let plan = plan_from_proto(plan).unwrap();
+        assert_eq!(
+            plan.type_source,
+            graspd_core::planning::TypeSource::GeometricRule,
+            "{args:?}"
+        );
+        assert!(plan.feasible, "{args:?}: {:?}", plan.infeasible_reason);
+        let logs = server.logs().join("\n");
+        match warning {
+            Some(w) => assert!(logs.contains(w), "{args:?}: {logs}"),
+            None => assert!(logs.contains("no grasp-type model"), "{args:?}: {logs}"),
+        }
+    }
 }
 
 #[tokio::test]
@@ -226,10 +267,15 @@ async fn multipart_pngs_give_the_overlay_with_format_png_and_graspctl_writes_it(
         (overlay.width() as usize, overlay.height() as usize),
         (r.width, r.height)
     );
-    // The ROI box is drawn in yellow around the can; far from it the image is unchanged.
+    // The ROI box is drawn in yellow around the can; far from it the image is nearly unchanged
+    // (the heat map of s* is blended in, and the built-in model gives the background a low
+    // probability).
     let yellow = overlay.pixels().filter(|p| p.0 == [255, 220, 0]).count();
     assert!(yellow > 100, "{yellow} yellow pixels");
-    assert_eq!(overlay.get_pixel(5, 5).0, [r.rgb[15], r.rgb[16], r.rgb[17]]);
+    let corner = overlay.get_pixel(5, 5).0;
+    for (c, o) in corner.iter().zip(&r.rgb[15..18]) {
+        assert!(c.abs_diff(*o) <= 10, "{corner:?} vs {:?}", &r.rgb[15..18]);
+    }
 
     let dir = std::env::temp_dir().join(format!("graspd-rgbd-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -427,13 +473,7 @@ async fn bad_frames_and_image_hints_get_field_named_errors() {
 
     // The server still plans, from a cloud and from the frame.
     assert_valid_plan_works(&server).await;
-    let plan = server
-        .grpc()
-        .await
-        .plan_grasp(grpc_request(good, Some(pixel)))
-        .await
-        .unwrap()
-        .into_inner();
+    let plan = plan_frame(&server, good, Some(pixel)).await;
     assert_plan_on_the_can(&plan_from_proto(plan).unwrap(), r, "after the errors");
 }
 

@@ -132,14 +132,26 @@ fn bench_perception(c: &mut Criterion) {
     if model.is_none() {
         eprintln!("ORT_DYLIB_PATH unset or unloadable: the model rows are skipped");
     }
+    // The shipped network (models/grasp_type), as graspd loads it by default.
+    let shipped = model.as_ref().map(|_| {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../models/grasp_type/grasp_type.onnx"
+        );
+        GraspTypeModel::load(std::path::Path::new(path), 1).unwrap()
+    });
     let hand = HandCatalog::builtin().get("shadow").cloned().unwrap();
     let realisable = hand.realisable_types();
-    for (name, m) in [("no_model", None), ("fcn_4_16_16_6", model.as_ref())] {
+    for (name, m) in [
+        ("no_model", None),
+        ("fcn_4_16_16_6", model.as_ref()),
+        ("shipped_unet", shipped.as_ref()),
+    ] {
         if name != "no_model" && m.is_none() {
             continue;
         }
         if let Some(m) = m {
-            g.bench_function("model_inference_1_thread", |b| {
+            g.bench_function(format!("model_inference_1_thread_{name}"), |b| {
                 b.iter(|| black_box(m.infer(&decoded).unwrap()))
             });
         }

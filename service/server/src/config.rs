@@ -67,9 +67,10 @@ pub struct Cli {
     /// Largest RGB-D frame, width × height pixels [default: 16777216 (4096²)].
     #[arg(long, env = "GRASPD_MAX_IMAGE_PIXELS", value_name = "N")]
     pub max_image_pixels: Option<usize>,
-    /// The grasp-type network (ONNX, docs/model-contract.md) for RGB-D input [default: none:
-    /// the geometric rule decides types]. A configured model that does not load or breaks the
-    /// contract stops the start.
+    /// The grasp-type network (ONNX, docs/model-contract.md) for RGB-D input [default: the copy
+    /// of models/grasp_type/grasp_type.onnx built into graspd; if it cannot be loaded (no ONNX
+    /// Runtime) graspd warns and the geometric rule decides types]. `none`: no model. A given
+    /// file that does not load or breaks the contract stops the start.
     #[arg(long, env = "GRASPD_GRASP_TYPE_MODEL", value_name = "FILE")]
     pub grasp_type_model: Option<PathBuf>,
     /// The tactile contact/slip/material detector (ONNX, models/tactile/MODEL_CARD.md)

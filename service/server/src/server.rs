@@ -37,8 +37,8 @@ pub enum ServeError {
     Rest(std::io::Error),
     #[error("cannot load the hands: {0}")]
     Hands(String),
-    #[error("cannot load the grasp-type model: {0}")]
-    Model(String),
+    #[error("cannot load the {what}: {reason}")]
+    Model { what: &'static str, reason: String },
     #[error("TLS: {0}")]
     Tls(#[from] TlsError),
     #[error("server task failed: {0}")]
@@ -51,55 +51,94 @@ async fn bind(what: &'static str, addr: SocketAddr) -> Result<TcpListener, Serve
         .map_err(|source| ServeError::Bind { what, addr, source })
 }
 
-/// The shipped tactile detector (models/tactile/tactile_detector.onnx, a few hundred KB), built
-/// into the binary so that a bare `graspd` has it.
+/// The shipped models (models/grasp_type/grasp_type.onnx, about 1.4 MB, and
+/// models/tactile/tactile_detector.onnx, about 130 KB), built into the binary so that a bare
+/// `graspd` has them.
+const EMBEDDED_GRASP_TYPE_MODEL: &[u8] =
+    include_bytes!("../../../models/grasp_type/grasp_type.onnx");
+const EMBEDDED_GRASP_TYPE_NAME: &str = "built-in models/grasp_type/grasp_type.onnx";
 const EMBEDDED_TACTILE_MODEL: &[u8] =
     include_bytes!("../../../models/tactile/tactile_detector.onnx");
 const EMBEDDED_TACTILE_NAME: &str = "built-in models/tactile/tactile_detector.onnx";
 
-/// Loads the tactile model: a configured file must load (else the start fails); the built-in
-/// copy is loaded when none is configured, and if that fails (e.g. no ONNX Runtime) graspd warns
-/// and sessions use the model-free detector; `none` loads nothing.
-fn with_tactile_model(
-    service: GraspService,
-    settings: &Settings,
-) -> Result<GraspService, ServeError> {
-    let load = |path: Option<&std::path::Path>| {
-        tokio::task::block_in_place(|| {
-            init_onnx_runtime(settings.onnxruntime.as_deref())
-                .map_err(TactileModelError::Runtime)?;
+/// Loads a model the same way for both: a configured file must load (else the start fails);
+/// with none configured the built-in copy is loaded (`load(None)`), and if that fails (e.g. no
+/// ONNX Runtime) graspd warns and runs without (`fallback` says what it does instead); `none`
+/// loads nothing.
+fn load_model<M, E: std::fmt::Display>(
+    what: &'static str,
+    configured: Option<&std::path::Path>,
+    fallback: &str,
+    load: impl FnOnce(Option<&std::path::Path>) -> Result<M, E>,
+) -> Result<Option<M>, ServeError> {
+    let load = |path| tokio::task::block_in_place(|| load(path));
+    match configured {
+        Some(p) if p.as_os_str() == "none" => {
+            tracing::info!("no {what} (set to none): {fallback}");
+            Ok(None)
+        }
+        Some(path) => load(Some(path)).map(Some).map_err(|e| ServeError::Model {
+            what,
+            reason: e.to_string(),
+        }),
+        None => match load(None) {
+            Ok(m) => Ok(Some(m)),
+            Err(e) => {
+                tracing::warn!(error = %e, "the built-in {what} is not loaded: {fallback}");
+                Ok(None)
+            }
+        },
+    }
+}
+
+fn with_models(service: GraspService, settings: &Settings) -> Result<GraspService, ServeError> {
+    let runtime = settings.onnxruntime.as_deref();
+    let mut service = service;
+    if let Some(model) = load_model(
+        "grasp-type model",
+        settings.grasp_type_model.as_deref(),
+        "the geometric rule decides grasp types",
+        |path| {
+            init_onnx_runtime(runtime)?;
+            match path {
+                Some(p) => GraspTypeModel::load(p, settings.model_threads),
+                None => GraspTypeModel::from_bytes(
+                    EMBEDDED_GRASP_TYPE_MODEL,
+                    EMBEDDED_GRASP_TYPE_NAME,
+                    settings.model_threads,
+                ),
+            }
+        },
+    )? {
+        tracing::info!(
+            source = %model.path().display(),
+            channels = model.channels(),
+            "grasp-type model loaded"
+        );
+        service = service.with_grasp_type_model(Arc::new(model));
+    }
+    if let Some(model) = load_model(
+        "tactile model",
+        settings.tactile_model.as_deref(),
+        "tactile sessions use the model-free detector",
+        |path| {
+            init_onnx_runtime(runtime).map_err(TactileModelError::Runtime)?;
             match path {
                 Some(p) => TactileModel::load(p),
                 None => TactileModel::from_bytes(EMBEDDED_TACTILE_MODEL, EMBEDDED_TACTILE_NAME),
             }
-        })
-    };
-    let model = match settings.tactile_model.as_deref() {
-        Some(p) if p.as_os_str() == "none" => {
-            tracing::info!("no tactile model (--tactile-model none): model-free detector");
-            return Ok(service);
-        }
-        Some(path) => load(Some(path)).map_err(|e| ServeError::Model(e.to_string()))?,
-        None => match load(None) {
-            Ok(m) => m,
-            Err(e) => {
-                tracing::warn!(
-                    error = %e,
-                    "the built-in tactile model is not loaded; tactile sessions use the \
-                     model-free detector"
-                );
-                return Ok(service);
-            }
         },
-    };
-    tracing::info!(
-        source = model.source_name(),
-        window = model.window_length(),
-        stride = model.stride(),
-        electrodes = model.electrode_count(),
-        "tactile model loaded"
-    );
-    Ok(service.with_tactile_model(Arc::new(model)))
+    )? {
+        tracing::info!(
+            source = model.source_name(),
+            window = model.window_length(),
+            stride = model.stride(),
+            electrodes = model.electrode_count(),
+            "tactile model loaded"
+        );
+        service = service.with_tactile_model(Arc::new(model));
+    }
+    Ok(service)
 }
 
 /// Binds both listeners, prints `graspd listening grpc=ADDR rest=ADDR` on stdout (tests read
@@ -113,23 +152,7 @@ pub async fn run(
         GraspService::with_hands(settings.limits(), &settings.hand_setup())
     })
     .map_err(ServeError::Hands)?;
-    let service = match &settings.grasp_type_model {
-        None => service,
-        Some(path) => {
-            let model = tokio::task::block_in_place(|| {
-                init_onnx_runtime(settings.onnxruntime.as_deref())?;
-                GraspTypeModel::load(path, settings.model_threads)
-            })
-            .map_err(|e| ServeError::Model(e.to_string()))?;
-            tracing::info!(
-                path = %path.display(),
-                channels = model.channels(),
-                "grasp-type model loaded"
-            );
-            service.with_grasp_type_model(Arc::new(model))
-        }
-    };
-    let service = with_tactile_model(service, settings)?;
+    let service = with_models(service, settings)?;
     // TLS files next: one that cannot be read, or a key that does not match, fails the start.
     let tls = settings.tls_files().map(|f| Tls::load(&f)).transpose()?;
     let grpc_listener = bind("gRPC", settings.grpc_addr).await?;

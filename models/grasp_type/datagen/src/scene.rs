@@ -370,144 +370,121 @@ pub struct Frame {
 /// An object before placement: its parts in the object's frame (origin on the table, z up) and
 /// the radius of its footprint.
 struct ObjectParts {
-    parts: Vec<(Arc<dyn Shape>, Isometry3<f64>, PartDims)>,
+    parts: Vec<PartSpec>,
     footprint: f64,
 }
 
-fn cylinder_y_up() -> UnitQuaternion<f64> {
-    // parry's cylinder axis is local y; turn it to z.
-    UnitQuaternion::from_axis_angle(&Vector3::x_axis(), FRAC_PI_2)
+/// A part in its object's frame.
+type PartSpec = (Arc<dyn Shape>, Isometry3<f64>, PartDims);
+
+/// A box of extents `e` standing on the table.
+fn standing_box(e: [f64; 3]) -> PartSpec {
+    (
+        Arc::new(Cuboid::new(Vector::new(e[0] / 2.0, e[1] / 2.0, e[2] / 2.0))),
+        Isometry3::translation(0.0, 0.0, e[2] / 2.0),
+        PartDims::from_extents_m(e, e[2]),
+    )
+}
+
+/// A cylinder of radius `r` and height `h` standing on the table (parry's axis is local y).
+fn standing_cylinder(r: f64, h: f64) -> PartSpec {
+    (
+        Arc::new(Cylinder::new(h / 2.0, r)),
+        Isometry3::from_parts(
+            Translation3::new(0.0, 0.0, h / 2.0),
+            UnitQuaternion::from_axis_angle(&Vector3::x_axis(), FRAC_PI_2),
+        ),
+        PartDims::from_extents_m([2.0 * r, 2.0 * r, h], h),
+    )
+}
+
+/// A cylinder of radius `r` and length `l` lying along x, its axis `z` above the table.
+fn lying_cylinder(r: f64, l: f64, z: f64) -> PartSpec {
+    (
+        Arc::new(Cylinder::new(l / 2.0, r)),
+        Isometry3::from_parts(
+            Translation3::new(0.0, 0.0, z),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), FRAC_PI_2),
+        ),
+        PartDims::from_extents_m([2.0 * r, 2.0 * r, l], 2.0 * r),
+    )
+}
+
+fn extents(rng: &mut ChaCha8Rng, xy: std::ops::Range<f64>, z: std::ops::Range<f64>) -> [f64; 3] {
+    [
+        rng.random_range(xy.clone()),
+        rng.random_range(xy),
+        rng.random_range(z),
+    ]
+}
+
+/// Radius of the circle around a w × d footprint.
+fn half_diagonal(w: f64, d: f64) -> f64 {
+    0.5 * (w * w + d * d).sqrt()
 }
 
 fn random_object(rng: &mut ChaCha8Rng) -> graspd_testkit::Result<ObjectParts> {
     let kind = rng.random_range(0..100);
-    let mut parts: Vec<(Arc<dyn Shape>, Isometry3<f64>, PartDims)> = Vec::new();
-    let footprint: f64;
-    if kind < 30 {
+    let (parts, footprint): (Vec<PartSpec>, f64) = if kind < 30 {
         let object = Object::ALL[rng.random_range(0..Object::ALL.len())];
         let m = mesh(object)?;
         let aabb = m.local_aabb();
         let (lo, hi) = (aabb.mins, aabb.maxs);
         let ext = [hi.x - lo.x, hi.y - lo.y, hi.z - lo.z];
         let shift = Translation3::new(-(lo.x + hi.x) / 2.0, -(lo.y + hi.y) / 2.0, -lo.z);
-        footprint = 0.5 * (ext[0].powi(2) + ext[1].powi(2)).sqrt();
         let shape: Arc<dyn Shape> = m;
-        parts.push((
-            shape,
-            Isometry3::from_parts(shift, UnitQuaternion::identity()),
-            PartDims::from_extents_m(ext, ext[2]),
-        ));
+        let pose = Isometry3::from_parts(shift, UnitQuaternion::identity());
+        (
+            vec![(shape, pose, PartDims::from_extents_m(ext, ext[2]))],
+            half_diagonal(ext[0], ext[1]),
+        )
     } else if kind < 42 {
-        // Standing cylinder.
         let (r, h) = (rng.random_range(0.01..0.06), rng.random_range(0.03..0.25));
-        footprint = r;
-        parts.push((
-            Arc::new(Cylinder::new(h / 2.0, r)),
-            Isometry3::from_parts(Translation3::new(0.0, 0.0, h / 2.0), cylinder_y_up()),
-            PartDims::from_extents_m([2.0 * r, 2.0 * r, h], h),
-        ));
+        (vec![standing_cylinder(r, h)], r)
     } else if kind < 52 {
-        // Lying cylinder (axis along local x).
         let (r, l): (f64, f64) = (rng.random_range(0.008..0.05), rng.random_range(0.06..0.25));
-        footprint = 0.5 * (l * l + 4.0 * r * r).sqrt();
-        parts.push((
-            Arc::new(Cylinder::new(l / 2.0, r)),
-            Isometry3::from_parts(
-                Translation3::new(0.0, 0.0, r),
-                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), FRAC_PI_2),
-            ),
-            PartDims::from_extents_m([2.0 * r, 2.0 * r, l], 2.0 * r),
-        ));
+        (vec![lying_cylinder(r, l, r)], half_diagonal(l, 2.0 * r))
     } else if kind < 62 {
-        // Box.
-        let e: [f64; 3] = [
-            rng.random_range(0.02..0.16),
-            rng.random_range(0.02..0.16),
-            rng.random_range(0.02..0.16),
-        ];
-        footprint = 0.5 * (e[0] * e[0] + e[1] * e[1]).sqrt();
-        parts.push((
-            Arc::new(Cuboid::new(Vector::new(e[0] / 2.0, e[1] / 2.0, e[2] / 2.0))),
-            Isometry3::translation(0.0, 0.0, e[2] / 2.0),
-            PartDims::from_extents_m(e, e[2]),
-        ));
+        let e = extents(rng, 0.02..0.16, 0.02..0.16);
+        (vec![standing_box(e)], half_diagonal(e[0], e[1]))
     } else if kind < 68 {
-        // Thin plate lying flat.
-        let e: [f64; 3] = [
-            rng.random_range(0.06..0.2),
-            rng.random_range(0.06..0.2),
-            rng.random_range(0.004..0.015),
-        ];
-        footprint = 0.5 * (e[0] * e[0] + e[1] * e[1]).sqrt();
-        parts.push((
-            Arc::new(Cuboid::new(Vector::new(e[0] / 2.0, e[1] / 2.0, e[2] / 2.0))),
-            Isometry3::translation(0.0, 0.0, e[2] / 2.0),
-            PartDims::from_extents_m(e, e[2]),
-        ));
+        // A thin plate lying flat.
+        let e = extents(rng, 0.06..0.2, 0.004..0.015);
+        (vec![standing_box(e)], half_diagonal(e[0], e[1]))
     } else if kind < 76 {
-        // Sphere.
         let r = rng.random_range(0.015..0.06);
-        footprint = r;
-        parts.push((
+        let ball: PartSpec = (
             Arc::new(Ball::new(r)),
             Isometry3::translation(0.0, 0.0, r),
             PartDims::from_extents_m([2.0 * r; 3], 2.0 * r),
-        ));
+        );
+        (vec![ball], r)
     } else if kind < 86 {
         // A small item (a cap, a die, an eraser): a box or a standing cylinder of 1.5–6 cm.
-        let e: [f64; 3] = [
-            rng.random_range(0.015..0.06),
-            rng.random_range(0.015..0.06),
-            rng.random_range(0.015..0.06),
-        ];
-        footprint = 0.5 * (e[0] * e[0] + e[1] * e[1]).sqrt();
-        let dims = PartDims::from_extents_m(e, e[2]);
-        if rng.random_bool(0.5) {
-            parts.push((
-                Arc::new(Cuboid::new(Vector::new(e[0] / 2.0, e[1] / 2.0, e[2] / 2.0))),
-                Isometry3::translation(0.0, 0.0, e[2] / 2.0),
-                dims,
-            ));
+        let e = extents(rng, 0.015..0.06, 0.015..0.06);
+        let part = if rng.random_bool(0.5) {
+            standing_box(e)
         } else {
-            let r = e[0] / 2.0;
-            parts.push((
-                Arc::new(Cylinder::new(e[2] / 2.0, r)),
-                Isometry3::from_parts(Translation3::new(0.0, 0.0, e[2] / 2.0), cylinder_y_up()),
-                PartDims::from_extents_m([e[0], e[0], e[2]], e[2]),
-            ));
-        }
+            standing_cylinder(e[0] / 2.0, e[2])
+        };
+        (vec![part], half_diagonal(e[0], e[1]))
     } else if kind < 93 {
         // A thin rod lying on the table (a marker, a tool).
         let (r, l): (f64, f64) = (rng.random_range(0.005..0.018), rng.random_range(0.1..0.25));
-        footprint = l / 2.0;
-        parts.push((
-            Arc::new(Cylinder::new(l / 2.0, r)),
-            Isometry3::from_parts(
-                Translation3::new(0.0, 0.0, r),
-                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), FRAC_PI_2),
-            ),
-            PartDims::from_extents_m([2.0 * r, 2.0 * r, l], 2.0 * r),
-        ));
+        (vec![lying_cylinder(r, l, r)], l / 2.0)
     } else {
-        // A body with a horizontal handle (a pot, a pan, a tool).
+        // A body with a horizontal handle (a pot, a pan, a tool): the handle starts inside the
+        // body's wall.
         let (r, h) = (rng.random_range(0.03..0.07), rng.random_range(0.04..0.16));
         let (hr, hl) = (rng.random_range(0.007..0.016), rng.random_range(0.08..0.16));
-        let hz = rng.random_range(0.4..0.9) * h;
-        footprint = r + hl;
-        parts.push((
-            Arc::new(Cylinder::new(h / 2.0, r)),
-            Isometry3::from_parts(Translation3::new(0.0, 0.0, h / 2.0), cylinder_y_up()),
-            PartDims::from_extents_m([2.0 * r, 2.0 * r, h], h),
-        ));
-        // The handle's axis (local y) along x, starting inside the body's wall.
-        parts.push((
-            Arc::new(Cylinder::new(hl / 2.0, hr)),
-            Isometry3::from_parts(
-                Translation3::new(r - 0.005 + hl / 2.0, 0.0, hz.max(hr)),
-                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), FRAC_PI_2),
-            ),
-            PartDims::from_extents_m([2.0 * hr, 2.0 * hr, hl], 2.0 * hr),
-        ));
-    }
+        let hz: f64 = rng.random_range(0.4..0.9) * h;
+        let (shape, pose, dims) = lying_cylinder(hr, hl, hz.max(hr));
+        let handle = (
+            shape,
+            Isometry3::translation(r - 0.005 + hl / 2.0, 0.0, 0.0) * pose,
+            dims,
+        );
+        (vec![standing_cylinder(r, h), handle], r + hl)
+    };
     Ok(ObjectParts { parts, footprint })
 }
