@@ -64,16 +64,18 @@ def summarise(feats: np.ndarray, labels: np.ndarray) -> dict:
 def real_stats(data: str) -> dict:
     by_class: dict[str, list] = {c: [] for c in sim.MATERIALS}
     force: dict[str, list] = {c: [] for c in sim.MATERIALS}
+    phase_items = []
     for mat, cls in REAL_CLASSES.items():
         for n in CALIBRATION_SAMPLES:
             base = os.path.join(data, mat, f"{mat}_{n}")
             b = sim.read_bio_csv(base + "_bio.csv")
-            labels, fz, _ = real_labels(b["timestamp"], base + "_cw.csv", base + "_cv.csv")
+            labels, fz, speed = real_labels(b["timestamp"], base + "_cw.csv", base + "_cv.csv")
             _, feats = sim.detector_samples(b["tdc"], b["tac"], b["pdc"], b["pac"], b["electrodes"],
                                             "pretared")
             by_class[cls].append((feats, labels))
             force[cls].append(fz[labels > 0])
-    out = {}
+            phase_items.append((feats, speed, b["pac"].mean(axis=1)))
+    out = {"phases": _phase_stats(phase_items)}
     for cls, items in by_class.items():
         f = np.concatenate([x[0] for x in items])
         l = np.concatenate([x[1] for x in items])
@@ -82,16 +84,53 @@ def real_stats(data: str) -> dict:
     return out
 
 
+def _phase_stats(items) -> dict:
+    """Label-free / event-phase statistics pooled over all materials (no per-material value):
+    `items` are (features, arm speed m/s, pac frame mean) per recording; "moving" = arm speed
+    >= 5 mm/s (the slide phase), no force or material used."""
+    vib, lag1, lag10, sd1s, dpdc, first_moving, floor = [], [], [], [], [], [], []
+    pdc_by_second = [[] for _ in range(8)]
+    for feats, speed, pac_mean in items:
+        mv = speed >= sim.SLIP_SPEED
+        vib.extend(feats[mv, 2])
+        for lag, out in ((1, lag1), (10, lag10)):
+            m = mv[lag:] & mv[:-lag]
+            out.extend((pac_mean[lag:] - pac_mean[:-lag])[m])
+        dp = np.diff(feats[:, 0])
+        dpdc.extend(dp[mv[1:] & mv[:-1]])
+        for t in range(100, len(feats), 10):
+            if mv[t]:
+                sd1s.append(pac_mean[t - 99 : t + 1].std())
+        moving = np.flatnonzero(mv)
+        first_moving.append(int(moving[0]) if len(moving) else len(mv))
+        floor.append(np.percentile(pac_mean, 5))
+        for k in range(8):
+            pdc_by_second[k].extend(feats[k * 100 : (k + 1) * 100, 0])
+    pct = lambda v: [round(float(x), 2) for x in np.percentile(v, PCT)]  # noqa: E731
+    return {
+        "about": "pooled over all materials, samples 1-10; moving = arm planar speed >= 5 mm/s",
+        "moving_fraction": round(float(np.mean([len(i[1]) and (i[1] >= sim.SLIP_SPEED).mean() for i in items])), 4),
+        "first_moving_frame": pct(first_moving),
+        "pac_vibration_moving": pct(vib),
+        "pac_mean_lag1_diff_std_moving": round(float(np.std(lag1)), 1),
+        "pac_mean_lag10_diff_std_moving": round(float(np.std(lag10)), 1),
+        "pac_mean_1s_std_moving": pct(sd1s),
+        "pac_mean_p5_per_recording": pct(floor),
+        "pdc_frame_diff_std_moving": round(float(np.std(dpdc)), 2),
+        "pdc_median_by_second": [round(float(np.median(v)), 1) for v in pdc_by_second if v],
+    }
+
+
 def generated_stats(seed: int, count: int) -> dict:
     seqs = [s for s in sim.generate_set(seed, count) if s.style == "pretared"]
-    out = {}
+    feats_of = {id(s): sim.detector_samples(s.tdc, s.tac, s.pdc, s.pac, s.electrodes, s.style)[1] for s in seqs}
+    out = {"phases": _phase_stats([(feats_of[id(s)], s.speed, s.pac.mean(axis=1)) for s in seqs])}
     for cls in sim.MATERIALS:
         fs, ls = [], []
         for s in seqs:
             if s.material != cls:
                 continue
-            _, feats = sim.detector_samples(s.tdc, s.tac, s.pdc, s.pac, s.electrodes, s.style)
-            fs.append(feats)
+            fs.append(feats_of[id(s)])
             ls.append(s.labels)
         out[cls] = summarise(np.concatenate(fs), np.concatenate(ls))
         out[cls]["fz_in_contact"] = [round(float(x), 2) for x in np.percentile(
@@ -125,6 +164,9 @@ def main():
             r = result.get("real", {}).get(cls, {}).get(key)
             g = result["generated"][cls][key]
             print(f"  {cls:8s} real {r}  generated {g}")
+    for key in result["generated"]["phases"]:
+        if key != "about":
+            print(f"{key}: real {result.get('real', {}).get('phases', {}).get(key)}  generated {result['generated']['phases'][key]}")
     print("label fractions real", {c: result.get("real", {}).get(c, {}).get("label_fraction") for c in sim.MATERIALS})
     print("label fractions gen ", {c: result["generated"][c]["label_fraction"] for c in sim.MATERIALS})
 
