@@ -1,14 +1,23 @@
 //! Optional bearer-token authentication: `authorization: Bearer <token>` on REST requests and as
-//! gRPC metadata, compared in constant time against every configured token.
+//! gRPC metadata, compared in constant time against every configured token. Only SHA-256 digests
+//! of the tokens are kept and compared, so neither the comparison's time nor memory tells a
+//! token's content or length.
 //!
 //! Tokens never reach logs: [`Tokens`]' `Debug` prints only their count, and the configuration
 //! prints a count instead of them.
 
+use ring::digest::{SHA256, digest};
 use subtle::{Choice, ConstantTimeEq};
 
-/// The configured tokens; empty means authentication is off.
+/// The configured tokens (their SHA-256 digests); empty means authentication is off.
 #[derive(Clone, Default, PartialEq, Eq)]
-pub struct Tokens(Vec<Vec<u8>>);
+pub struct Tokens(Vec<[u8; 32]>);
+
+fn sha256(bytes: &[u8]) -> [u8; 32] {
+    let mut out = [0; 32];
+    out.copy_from_slice(digest(&SHA256, bytes).as_ref());
+    out
+}
 
 impl std::fmt::Debug for Tokens {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -27,7 +36,7 @@ impl Tokens {
         tokens: impl IntoIterator<Item = S>,
         source: &str,
     ) -> Result<Self, String> {
-        let mut out: Vec<Vec<u8>> = Vec::new();
+        let mut out: Vec<[u8; 32]> = Vec::new();
         for (i, token) in tokens.into_iter().enumerate() {
             let token = token.as_ref();
             if token.is_empty() || token.len() > MAX_TOKEN_LEN {
@@ -42,7 +51,7 @@ impl Tokens {
                     i + 1
                 ));
             }
-            let token = token.as_bytes().to_vec();
+            let token = sha256(token.as_bytes());
             if !out.contains(&token) {
                 out.push(token);
             }
@@ -78,16 +87,17 @@ impl Tokens {
         self.0.is_empty()
     }
 
-    /// Whether `authorization` (the header's value, if any) carries one of the tokens. Every
-    /// token is compared, each in constant time, so the time does not tell which (nor how much
-    /// of one) matched; only a token's length can show.
+    /// Whether `authorization` (the header's value, if any) carries one of the tokens. The
+    /// presented token's digest is compared with every token's, each in constant time, so the
+    /// time does not tell which token matched, how much of one did, or how long they are.
     pub fn accepts(&self, authorization: Option<&[u8]>) -> bool {
         let Some(presented) = authorization.and_then(bearer) else {
             return false;
         };
+        let presented = sha256(presented);
         let mut matched = Choice::from(0);
         for token in &self.0 {
-            matched |= token.as_slice().ct_eq(presented);
+            matched |= token.ct_eq(&presented);
         }
         bool::from(matched)
     }
