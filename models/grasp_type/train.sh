@@ -8,13 +8,10 @@
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-venv="${MODELS_VENV:-$root/.tools/models-venv}"
-if [ ! -x "$venv/bin/python" ]; then
-	python3 -m venv "$venv"
-fi
-"$venv/bin/python" -m pip install --quiet -r "$here/requirements.txt"
+. "$here/../venv.sh"
+models_venv "$here"
 case " $* " in
-*" --data "*) exec nice "$venv/bin/python" "$here/train.py" "$@" ;;
+*" --data "* | *" --data="*) exec nice "$py" "$here/train.py" "$@" ;;
 esac
 data="${GRASP_TYPE_DATA:-$root/target/grasp_type_data}"
 (cd "$root" && cargo build --release -p graspd-grasp-type-data)
@@ -25,6 +22,6 @@ for split in "train 6000 1" "val 400 2" "test 600 3"; do
 		"$gen" --out "$data/$name" --count "$count" --seed "$seed" --previews 8
 	fi
 done
-"$venv/bin/python" "$here/train.py" --self-check --test "$data/test"
-exec nice "$venv/bin/python" "$here/train.py" --train "$data/train" --val "$data/val" \
+"$py" "$here/train.py" --self-check --test "$data/test"
+exec nice "$py" "$here/train.py" --train "$data/train" --val "$data/val" \
 	--test "$data/test" --out "$here" "$@"

@@ -6,16 +6,12 @@
 #   models/tactile/train.sh --data my_recordings/ --tare raw
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
-root="$(cd "$here/../.." && pwd)"
-venv="${MODELS_VENV:-$root/.tools/models-venv}"
-if [ ! -x "$venv/bin/python" ]; then
-	python3 -m venv "$venv"
-fi
-"$venv/bin/python" -m pip install --quiet -r "$here/requirements.txt"
+. "$here/../venv.sh"
+models_venv "$here"
 cd "$here"
 if [ "$#" -eq 0 ]; then
-	nice "$venv/bin/python" calibrate.py
+	nice "$py" calibrate.py
 	# The shipped model: every 2nd window of 1000 generated sequences (MODEL_CARD.md).
-	exec nice "$venv/bin/python" train.py --subsample 2
+	exec nice "$py" train.py --subsample 2
 fi
-exec nice "$venv/bin/python" train.py "$@"
+exec nice "$py" train.py "$@"

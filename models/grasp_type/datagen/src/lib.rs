@@ -6,7 +6,7 @@
 pub mod labels;
 pub mod scene;
 
-use graspd_core::perception::{CameraIntrinsics, DecodedFrame, resized_planes};
+use graspd_core::perception::{CameraIntrinsics, DecodedFrame, bilinear_taps, resized_planes};
 pub use scene::{Frame, Scene};
 
 /// Source rows (or columns) that a bilinear resize from `src` to `dst` reads, and the one the
@@ -14,11 +14,9 @@ pub use scene::{Frame, Scene};
 pub fn needed(src: usize, dst: usize) -> Vec<bool> {
     let mut need = vec![src == dst; src];
     let r = src as f64 / dst as f64;
-    for o in 0..dst {
-        let s = ((o as f64 + 0.5) * r - 0.5).clamp(0.0, (src - 1) as f64);
-        let i0 = s.floor() as usize;
+    for (o, (i0, i1, _)) in bilinear_taps(src, dst).into_iter().enumerate() {
         need[i0] = true;
-        need[(i0 + 1).min(src - 1)] = true;
+        need[i1] = true;
         need[label_source(o, r, src)] = true;
     }
     need

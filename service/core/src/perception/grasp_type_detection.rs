@@ -255,29 +255,22 @@ impl GraspTypeModel {
     /// `intra_threads`: ONNX Runtime threads per run (0: its default, one per core). Initialises
     /// ONNX Runtime from `$ORT_DYLIB_PATH` if [`init_onnx_runtime`] has not been called.
     pub fn load(path: &Path, intra_threads: usize) -> Result<Self, ModelError> {
+        let load_err = |reason: String| ModelError::Load {
+            path: path.to_path_buf(),
+            reason,
+        };
         // ONNX Runtime's message for a missing file is an opaque system error.
         if !path.is_file() {
-            return Err(ModelError::Load {
-                path: path.to_path_buf(),
-                reason: "no such file".into(),
-            });
+            return Err(load_err("no such file".into()));
         }
-        Self::build(path, intra_threads, |b| b.commit_from_file(path))
+        let bytes = std::fs::read(path).map_err(|e| load_err(e.to_string()))?;
+        Self::from_bytes(&bytes, &path.display().to_string(), intra_threads)
     }
 
     /// Loads a model held in memory (the copy of models/grasp_type/grasp_type.onnx built into
     /// graspd); `name` stands for its path in messages.
     pub fn from_bytes(bytes: &[u8], name: &str, intra_threads: usize) -> Result<Self, ModelError> {
-        Self::build(Path::new(name), intra_threads, |b| {
-            b.commit_from_memory(bytes)
-        })
-    }
-
-    fn build(
-        path: &Path,
-        intra_threads: usize,
-        commit: impl FnOnce(&mut ort::session::builder::SessionBuilder) -> ort::Result<Session>,
-    ) -> Result<Self, ModelError> {
+        let path = Path::new(name);
         let env = runtime_env(None)?;
         let load_err = |reason: String| ModelError::Load {
             path: path.to_path_buf(),
@@ -287,7 +280,9 @@ impl GraspTypeModel {
             .map_err(|e| load_err(e.to_string()))?
             .with_intra_threads(intra_threads)
             .map_err(|e| load_err(e.to_string()))?;
-        let session = commit(&mut builder).map_err(|e| load_err(e.to_string()))?;
+        let session = builder
+            .commit_from_memory(bytes)
+            .map_err(|e| load_err(e.to_string()))?;
         let contract_err = |reason: String| ModelError::Contract {
             path: path.to_path_buf(),
             reason,
@@ -448,8 +443,9 @@ fn sigmoid(x: f32) -> f32 {
 }
 
 /// Bilinear taps (i0, i1, fraction of i1) from `src` samples to `dst`, pixel centres aligned
-/// (OpenCV's INTER_LINEAR, PyTorch's `align_corners=False`), clamped at the borders.
-fn bilinear_taps(src: usize, dst: usize) -> Vec<(usize, usize, f32)> {
+/// (OpenCV's INTER_LINEAR, PyTorch's `align_corners=False`), clamped at the borders: what
+/// [`resized_planes`] reads.
+pub fn bilinear_taps(src: usize, dst: usize) -> Vec<(usize, usize, f32)> {
     let r = src as f64 / dst as f64;
     (0..dst)
         .map(|o| {
