@@ -90,6 +90,17 @@ fn shared_hands_plan_reachable_grasps_on_ycb_views() {
             for c in &p.contacts {
                 assert_eq!(c.ik_residual.is_some(), c.finger != "palm", "{file}");
             }
+            // root_pose: mounting the model there at the planned joints puts its hand frame on
+            // hand_pose (what a simulator or an arm does with the plan).
+            let q: Vec<f64> = p.joints.iter().map(|(_, v)| *v).collect();
+            let posed = p.root_pose.expect("root_pose with kinematics").isometry()
+                * m.hand.hand_frame_in_root(&q).unwrap();
+            let want = p.hand_pose.isometry();
+            assert!(
+                (posed.translation.vector - want.translation.vector).norm() < 1e-9
+                    && posed.rotation.angle_to(&want.rotation) < 1e-9,
+                "{file} {object:?}: root_pose does not realise hand_pose"
+            );
             if p.feasible {
                 feasible += 1;
                 for c in &p.contacts {

@@ -95,6 +95,9 @@ pub struct JointConfiguration {
     pub reachable: bool,
     /// The planned hand pose after the palm correction.
     pub hand_pose: Pose,
+    /// The model's root frame (MJCF world body / URDF root link) in the world at the planned
+    /// joints and hand pose: where a robot or simulator mounts the model.
+    pub root_pose: Pose,
     /// Least signed distance of the posed hand to the support plane, m (None without a plane).
     pub plane_clearance: Option<f64>,
     /// Object points deeper than the tolerance inside the posed hand.
@@ -328,6 +331,12 @@ impl KinematicModel {
         let (q, (inside, _)) = best.expect("at least one posture");
         let posed = self.collision.posed(&self.hand, &q, &pose_iso)?;
         let plane_clearance = plane.map(|pl| posed.plane_clearance(pl));
+        // World ← hand frame ← root.
+        let root_iso = pose_iso * self.hand.hand_frame_in_root(&q)?.inverse();
+        let root_pose = Pose {
+            position: Point3::from(root_iso.translation.vector),
+            orientation: root_iso.rotation,
+        };
         let worst_residual = ik.residuals.iter().cloned().fold(0.0, f64::max);
         let (mut pre_points, mut app_points, mut app_clearance) = (0, 0, None);
         if final_effort {
@@ -359,6 +368,7 @@ impl KinematicModel {
             reachable: ik.reachable,
             residuals: ik.residuals,
             hand_pose: corrected,
+            root_pose,
             plane_clearance,
             points_in_collision: inside,
             pregrasp_points_in_collision: pre_points,

@@ -454,6 +454,7 @@ fn assemble(
         hand_pose,
         pregrasp_pose,
         joints: Vec::new(),
+        root_pose: None,
         quality: Quality {
             gii: s,
             reachability: assessment.r,
@@ -549,6 +550,7 @@ fn with_joints(
     };
     plan.hand_pose = joints.hand_pose;
     plan.joints = joints.joints.clone();
+    plan.root_pose = Some(joints.root_pose);
     let col = &mut plan.collision;
     col.checked = options.check_collisions;
     // The hand's own geometry replaces the parametric model's at every pose.

@@ -268,6 +268,10 @@ pub struct GraspPlan {
     /// Joint angles by name, when the hand's kinematics are known (empty for parametric hands):
     /// every joint of the model, inside its limits.
     pub joints: Vec<(String, f64)>,
+    /// Pose of the model's root frame (MJCF world body / URDF root link) at the planned joints,
+    /// when the hand's kinematics are known: where to mount the model to realise `hand_pose`.
+    #[serde(default)]
+    pub root_pose: Option<Pose>,
     pub quality: Quality,
     /// Whether S ≥ ε and every hard constraint held. When false, `infeasible_reason` says why and
     /// the plan is the best configuration found.

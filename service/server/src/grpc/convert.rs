@@ -755,6 +755,7 @@ pub fn plan_to_proto(p: &GraspPlan) -> pb::PlanGraspResponse {
             .collect(),
         hand_pose: Some(pose_to_proto(&p.hand_pose)),
         pregrasp_pose: Some(pose_to_proto(&p.pregrasp_pose)),
+        root_pose: p.root_pose.as_ref().map(pose_to_proto),
         joints: p
             .joints
             .iter()
@@ -868,6 +869,10 @@ pub fn plan_from_proto(p: pb::PlanGraspResponse) -> Result<GraspPlan, FieldError
         hand_pose: pose_from_proto(&p.hand_pose, "hand_pose")?,
         pregrasp_pose: pose_from_proto(&p.pregrasp_pose, "pregrasp_pose")?,
         joints: p.joints.into_iter().map(|j| (j.name, j.angle)).collect(),
+        root_pose: match &p.root_pose {
+            Some(_) => Some(pose_from_proto(&p.root_pose, "root_pose")?),
+            None => None,
+        },
         quality: Quality {
             gii: q.gii,
             reachability: q.reachability,

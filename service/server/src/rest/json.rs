@@ -640,6 +640,9 @@ pub struct PlanResponseJson {
     pub hand_pose: PoseJson,
     pub pregrasp_pose: PoseJson,
     pub joints: Vec<JointJson>,
+    /// The model's root frame at the planned joints (hands with kinematics only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub root_pose: Option<PoseJson>,
     #[schema(value_type = QualityDoc)]
     pub quality: Quality,
     pub feasible: bool,
@@ -763,6 +766,7 @@ impl From<&GraspPlan> for PlanResponseJson {
                 .collect(),
             hand_pose: (&p.hand_pose).into(),
             pregrasp_pose: (&p.pregrasp_pose).into(),
+            root_pose: p.root_pose.as_ref().map(Into::into),
             joints: p
                 .joints
                 .iter()
