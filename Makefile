@@ -3,13 +3,17 @@ CARGO ?= cargo
 # Extra flags for `make run`, e.g. make run ARGS="--rest-addr 127.0.0.1:8081 --log-format json"
 ARGS ?=
 
-.PHONY: build run test fmt lint fuzz models models-grasp-type models-tactile
+.PHONY: build run test fmt lint fuzz models models-grasp-type models-tactile sim-bench
 
 # The ONNX Runtime library that ort loads at run time (grasp-type model, docs/model-contract.md);
 # `run` and `test` fetch it first with scripts/fetch-onnxruntime.sh.
 run test: export ORT_DYLIB_PATH = $(CURDIR)/.tools/onnxruntime/libonnxruntime.so.1.31.1
+# MuJoCo 3.17.0, which clients/sim links (scripts/fetch-mujoco.sh fetches it from the PyPI wheel);
+# every target that compiles the workspace needs it.
+export MUJOCO_DYNAMIC_LINK_DIR = $(CURDIR)/.tools/mujoco
 
 build:
+	scripts/fetch-mujoco.sh
 	$(CARGO) build --bins
 
 # The shared hand models, imported at start by `make run` when ../shared/testdata/hands exists.
@@ -29,6 +33,7 @@ run:
 # The end-to-end tests start the real binaries, so build them first.
 test:
 	scripts/fetch-onnxruntime.sh
+	scripts/fetch-mujoco.sh
 	$(CARGO) build --bins
 	$(CARGO) test --workspace
 	scripts/python-client-test.sh
@@ -37,6 +42,7 @@ fmt:
 	$(CARGO) fmt --all
 
 lint:
+	scripts/fetch-mujoco.sh
 	$(CARGO) fmt --all --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
 
@@ -55,3 +61,14 @@ models-grasp-type:
 
 models-tactile:
 	models/tactile/train.sh
+
+# The grasp benchmark in MuJoCo (clients/sim/README.md): starts a release graspd on loopback and
+# runs graspd-sim bench over the Table 5.2 objects with the Robotiq 2F-85, Barrett and Shadow
+# hands, 10 trials each; results in sim-results/.
+SIM_ARGS ?=
+sim-bench: export ORT_DYLIB_PATH = $(CURDIR)/.tools/onnxruntime/libonnxruntime.so.1.31.1
+sim-bench:
+	scripts/fetch-onnxruntime.sh
+	scripts/fetch-mujoco.sh
+	$(CARGO) build --release --bin graspd --bin graspd-sim
+	scripts/sim-bench.sh $(SIM_ARGS)

@@ -1,0 +1,314 @@
+//! `graspd-sim bench`: trials over hands × objects on worker threads, reported as JSON, as a
+//! Markdown table laid out like the dissertation's Table 5.2 (objects × hands: successes/trials,
+//! mean plan latency, grasp types chosen) and as PNG snapshots.
+
+use crate::SimError;
+use crate::camera::{Intrinsics, RgbdImage, look_at};
+use crate::hand::SimHand;
+use crate::object::SimObject;
+use crate::scene::{Scene, on_table};
+use crate::service::Service;
+use crate::trial::{Outcome, TrialOptions, TrialRecord, run_trial};
+use indicatif::{ProgressBar, ProgressStyle};
+use nalgebra::Point3;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct BenchConfig {
+    pub hands: Vec<String>,
+    pub objects: Vec<String>,
+    pub trials: usize,
+    pub seed: u64,
+    pub jobs: usize,
+    pub out: PathBuf,
+    pub snapshots: bool,
+    pub hands_dir: PathBuf,
+    pub objects_dir: PathBuf,
+    pub options: TrialOptions,
+}
+
+/// Per hand: successes, trials, mean plan latency.
+#[derive(Debug, Clone, Serialize)]
+pub struct HandSummary {
+    pub hand: String,
+    pub label: String,
+    pub successes: usize,
+    pub trials: usize,
+    pub success_rate: f64,
+    pub mean_plan_ms: f64,
+    pub outcomes: BTreeMap<&'static str, usize>,
+}
+
+/// The whole run.
+#[derive(Debug, Serialize)]
+pub struct BenchReport {
+    pub hands: Vec<HandSummary>,
+    pub objects: Vec<String>,
+    pub trials_per_cell: usize,
+    pub seed: u64,
+    pub jobs: usize,
+    pub input: &'static str,
+    pub image: Intrinsics,
+    pub wall_s: f64,
+    pub trials_per_minute: f64,
+    pub records: Vec<TrialRecord>,
+    #[serde(skip)]
+    pub markdown: String,
+}
+
+/// Runs the benchmark and writes `results.json`, `table.md` and `snapshots/*.png` under
+/// `config.out`.
+pub fn run_bench(config: &BenchConfig, service: &Service) -> Result<BenchReport, SimError> {
+    let hands: Vec<SimHand> = config
+        .hands
+        .iter()
+        .map(|h| SimHand::load(h))
+        .collect::<Result<_, _>>()?;
+    let objects: Vec<SimObject> = config
+        .objects
+        .iter()
+        .map(|o| SimObject::load(&config.objects_dir, o))
+        .collect::<Result<_, _>>()?;
+    for h in &hands {
+        if service.ensure_hand(h, &config.hands_dir)? {
+            tracing::info!(hand = %h.graspd_hand, "registered with graspd");
+        }
+    }
+    std::fs::create_dir_all(config.out.join("snapshots"))
+        .map_err(|e| SimError::Input(format!("--out {}: {e}", config.out.display())))?;
+    // One work item per (hand, object): its scene compiles once for all its trials.
+    let cells: Vec<(usize, usize)> = (0..hands.len())
+        .flat_map(|h| (0..objects.len()).map(move |o| (h, o)))
+        .collect();
+    let total = cells.len() * config.trials;
+    let bar = ProgressBar::new(total as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} trials {elapsed} (eta {eta}) {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let next = Mutex::new(0usize);
+    let results: Mutex<Vec<TrialRecord>> = Mutex::new(Vec::new());
+    let errors: Mutex<Vec<SimError>> = Mutex::new(Vec::new());
+    let t0 = std::time::Instant::now();
+    std::thread::scope(|s| {
+        for _ in 0..config.jobs.max(1) {
+            s.spawn(|| {
+                loop {
+                    let k = {
+                        let mut n = next.lock().expect("work counter");
+                        *n += 1;
+                        *n - 1
+                    };
+                    let Some(&(h, o)) = cells.get(k) else { break };
+                    let (hand, obj) = (&hands[h], &objects[o]);
+                    let scene = match Scene::build(
+                        hand,
+                        &config.hands_dir,
+                        &[(obj, on_table(0.0, 0.0, 0.0))],
+                    ) {
+                        Ok(s) => s,
+                        Err(e) => {
+                            errors.lock().expect("errors").push(e);
+                            bar.inc(config.trials as u64);
+                            continue;
+                        }
+                    };
+                    for i in 0..config.trials {
+                        let seed = config.seed + i as u64;
+                        let mut opts = config.options;
+                        if config.snapshots && i == 0 {
+                            opts.snapshot = Some((Intrinsics::kinect(480, 360), snapshot_view()));
+                        }
+                        let mut rec = run_trial(&scene, hand, &obj.name, service, seed, &opts);
+                        if let Some(img) = rec.snapshot.take() {
+                            let name = format!("{}_{}.png", hand.name, obj.name);
+                            if let Err(e) = save_png(&img, &config.out.join("snapshots").join(name))
+                            {
+                                errors.lock().expect("errors").push(e);
+                            }
+                        }
+                        bar.set_message(format!(
+                            "{} {} {}",
+                            hand.name,
+                            obj.name,
+                            rec.outcome.name()
+                        ));
+                        bar.inc(1);
+                        results.lock().expect("results").push(rec);
+                    }
+                }
+            });
+        }
+    });
+    bar.finish_and_clear();
+    if let Some(e) = errors.into_inner().expect("errors").into_iter().next() {
+        return Err(e);
+    }
+    let wall_s = t0.elapsed().as_secs_f64();
+    let mut records = results.into_inner().expect("results");
+    records.sort_by(|a, b| (&a.hand, &a.object, a.seed).cmp(&(&b.hand, &b.object, b.seed)));
+    let summaries = hands
+        .iter()
+        .map(|h| summarise(h, records.iter().filter(|r| r.hand == h.name)))
+        .collect();
+    let mut report = BenchReport {
+        hands: summaries,
+        objects: config.objects.clone(),
+        trials_per_cell: config.trials,
+        seed: config.seed,
+        jobs: config.jobs,
+        input: if config.options.cloud_input {
+            "object point cloud"
+        } else {
+            "single-view RGB-D"
+        },
+        image: config.options.intrinsics,
+        wall_s,
+        trials_per_minute: records.len() as f64 / wall_s * 60.0,
+        records,
+        markdown: String::new(),
+    };
+    report.markdown = markdown(&report, &hands);
+    let write = |name: &str, text: &str| {
+        std::fs::write(config.out.join(name), text)
+            .map_err(|e| SimError::Input(format!("--out: {name}: {e}")))
+    };
+    write(
+        "results.json",
+        &serde_json::to_string_pretty(&report).unwrap_or_default(),
+    )?;
+    write("table.md", &report.markdown)?;
+    Ok(report)
+}
+
+fn summarise<'a>(hand: &SimHand, recs: impl Iterator<Item = &'a TrialRecord>) -> HandSummary {
+    let recs: Vec<&TrialRecord> = recs.collect();
+    let successes = recs
+        .iter()
+        .filter(|r| r.outcome == Outcome::Success)
+        .count();
+    let lat: Vec<f64> = recs.iter().filter_map(|r| r.plan_ms).collect();
+    let mut outcomes = BTreeMap::new();
+    for o in Outcome::ALL {
+        outcomes.insert(o.name(), recs.iter().filter(|r| r.outcome == o).count());
+    }
+    HandSummary {
+        hand: hand.name.clone(),
+        label: hand.label.clone(),
+        successes,
+        trials: recs.len(),
+        success_rate: successes as f64 / recs.len().max(1) as f64,
+        mean_plan_ms: lat.iter().sum::<f64>() / lat.len().max(1) as f64,
+        outcomes,
+    }
+}
+
+/// Table 5.2's layout: one row per object, per hand "successes/trials (types)", then the totals.
+fn markdown(report: &BenchReport, hands: &[SimHand]) -> String {
+    let mut s = String::new();
+    let _ = write!(s, "| object |");
+    for h in hands {
+        let _ = write!(s, " {} |", h.label);
+    }
+    let _ = writeln!(s);
+    let _ = write!(s, "|---|");
+    for _ in hands {
+        let _ = write!(s, "---|");
+    }
+    let _ = writeln!(s);
+    for o in &report.objects {
+        let _ = write!(s, "| {} |", o.replace('_', " "));
+        for h in hands {
+            let cell: Vec<&TrialRecord> = report
+                .records
+                .iter()
+                .filter(|r| &r.object == o && r.hand == h.name)
+                .collect();
+            let ok = cell
+                .iter()
+                .filter(|r| r.outcome == Outcome::Success)
+                .count();
+            let mut types: BTreeMap<&str, usize> = BTreeMap::new();
+            for r in &cell {
+                if let Some(t) = &r.grasp_type {
+                    *types.entry(t.as_str()).or_default() += 1;
+                }
+            }
+            let types: Vec<String> = types.iter().map(|(t, n)| format!("{t} {n}")).collect();
+            let _ = write!(s, " {ok}/{} ({}) |", cell.len(), types.join(", "));
+        }
+        let _ = writeln!(s);
+    }
+    let _ = write!(s, "| **success rate** |");
+    for h in &report.hands {
+        let _ = write!(
+            s,
+            " **{:.1} %** ({}/{}) |",
+            h.success_rate * 100.0,
+            h.successes,
+            h.trials
+        );
+    }
+    let _ = writeln!(s);
+    let _ = write!(s, "| mean PlanGrasp latency |");
+    for h in &report.hands {
+        let _ = write!(s, " {:.0} ms |", h.mean_plan_ms);
+    }
+    let _ = writeln!(s);
+    let _ = write!(s, "| failures |");
+    for h in &report.hands {
+        let f: Vec<String> = h
+            .outcomes
+            .iter()
+            .filter(|(k, n)| **k != "success" && **n > 0)
+            .map(|(k, n)| format!("{k} {n}"))
+            .collect();
+        let _ = write!(
+            s,
+            " {} |",
+            if f.is_empty() {
+                "none".into()
+            } else {
+                f.join(", ")
+            }
+        );
+    }
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "\n{} trials per cell, seeds {}..{}, {} input ({}×{}), {} worker threads: {:.0} s wall, \
+         {:.1} trials/min.",
+        report.trials_per_cell,
+        report.seed,
+        report.seed + report.trials_per_cell as u64,
+        report.input,
+        report.image.width,
+        report.image.height,
+        report.jobs,
+        report.wall_s,
+        report.trials_per_minute
+    );
+    s
+}
+
+/// The snapshot view: from the front-left, a little above the lifted grasp.
+fn snapshot_view() -> nalgebra::Isometry3<f64> {
+    look_at(Point3::new(-0.35, -0.3, 0.35), Point3::new(0.0, 0.0, 0.12))
+}
+
+/// Writes the colour image as PNG.
+pub fn save_png(img: &RgbdImage, path: &std::path::Path) -> Result<(), SimError> {
+    image::save_buffer(
+        path,
+        &img.rgb,
+        img.intrinsics.width,
+        img.intrinsics.height,
+        image::ExtendedColorType::Rgb8,
+    )
+    .map_err(|e| SimError::Input(format!("{}: {e}", path.display())))
+}

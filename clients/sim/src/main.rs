@@ -1,0 +1,179 @@
+//! `graspd-sim`: grasp trials in MuJoCo through a running graspd (see the crate README).
+
+use clap::{Parser, Subcommand};
+use graspd_sim::SimError;
+use graspd_sim::bench::{BenchConfig, run_bench};
+use graspd_sim::camera::{Intrinsics, default_view};
+use graspd_sim::hand::SimHand;
+use graspd_sim::object::SimObject;
+use graspd_sim::scene::Scene;
+use graspd_sim::service::Service;
+use graspd_sim::trial::{TrialOptions, placement, run_trial};
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(
+    name = "graspd-sim",
+    version,
+    about = "Grasp YCB objects with MuJoCo hand models through graspd"
+)]
+struct Cli {
+    /// graspd's gRPC address.
+    #[arg(
+        long,
+        env = "GRASPD_ADDR",
+        default_value = "http://127.0.0.1:50051",
+        global = true
+    )]
+    graspd: String,
+    /// Folder with hands/ and objects/ (../shared/testdata in a checkout).
+    #[arg(
+        long,
+        env = "GRASPD_SIM_TESTDATA",
+        default_value = "../shared/testdata",
+        global = true
+    )]
+    testdata: PathBuf,
+    /// Camera image size, WIDTHxHEIGHT (intrinsics scale with the width).
+    #[arg(long, default_value = "640x480", global = true)]
+    image: String,
+    /// Plan on the object's points (a cloud) instead of the RGB-D frame.
+    #[arg(long, global = true)]
+    cloud: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// One trial; prints its record as JSON.
+    Trial {
+        /// Built-in hand (robotiq_2f85, barrett, shadow) or a hand TOML file.
+        #[arg(long)]
+        hand: String,
+        /// YCB object name, e.g. tomato_soup_can.
+        #[arg(long)]
+        object: String,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
+    /// Trials over hands × objects; writes results.json, table.md and snapshots to --out.
+    Bench {
+        /// Comma-separated hands.
+        #[arg(long, default_value = "robotiq_2f85,barrett,shadow")]
+        hands: String,
+        /// Comma-separated objects; default: the eight of the dissertation's Table 5.2.
+        #[arg(long)]
+        objects: Option<String>,
+        /// Trials per hand and object.
+        #[arg(long, default_value_t = 10)]
+        trials: usize,
+        /// Seed of the first trial (trial i uses seed + i).
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Worker threads (default: the number of cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Output folder.
+        #[arg(long, default_value = "sim-results")]
+        out: PathBuf,
+        /// PNG snapshots of the first trial of each hand and object.
+        #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+        snapshots: bool,
+    },
+}
+
+fn parse_image(s: &str) -> Result<Intrinsics, SimError> {
+    let bad = || SimError::Input(format!("--image: `{s}` is not WIDTHxHEIGHT (e.g. 640x480)"));
+    let (w, h) = s.split_once('x').ok_or_else(bad)?;
+    let (w, h): (u32, u32) = (w.parse().map_err(|_| bad())?, h.parse().map_err(|_| bad())?);
+    if !(32..=4096).contains(&w) || !(32..=4096).contains(&h) {
+        return Err(bad());
+    }
+    Ok(Intrinsics::kinect(w, h))
+}
+
+fn main() {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    if let Err(e) = real_main() {
+        eprintln!("graspd-sim: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn real_main() -> Result<(), SimError> {
+    let cli = Cli::parse();
+    let intrinsics = parse_image(&cli.image)?;
+    let rt = tokio::runtime::Runtime::new()
+        .map_err(|e| SimError::Service(format!("tokio runtime: {e}")))?;
+    let service = Service::connect(&cli.graspd, rt.handle().clone())?;
+    let hands_dir = cli.testdata.join("hands");
+    let objects_dir = cli.testdata.join("objects");
+    let opts = TrialOptions {
+        intrinsics,
+        camera: default_view(),
+        cloud_input: cli.cloud,
+        snapshot: None,
+    };
+    match cli.command {
+        Command::Trial { hand, object, seed } => {
+            let hand = SimHand::load(&hand)?;
+            service.ensure_hand(&hand, &hands_dir)?;
+            let obj = SimObject::load(&objects_dir, &object)?;
+            let p = placement(seed);
+            let scene = Scene::build(
+                &hand,
+                &hands_dir,
+                &[(&obj, graspd_sim::scene::on_table(p[0], p[1], p[2]))],
+            )?;
+            let rec = run_trial(&scene, &hand, &object, &service, seed, &opts);
+            println!("{}", serde_json::to_string_pretty(&rec).unwrap_or_default());
+        }
+        Command::Bench {
+            hands,
+            objects,
+            trials,
+            seed,
+            jobs,
+            out,
+            snapshots,
+        } => {
+            let split = |s: &str| {
+                s.split(',')
+                    .map(str::trim)
+                    .filter(|s| !s.is_empty())
+                    .map(String::from)
+                    .collect::<Vec<_>>()
+            };
+            let config = BenchConfig {
+                hands: split(&hands),
+                objects: objects.map_or_else(
+                    || {
+                        graspd_sim::object::TABLE_5_2
+                            .iter()
+                            .map(|s| s.to_string())
+                            .collect()
+                    },
+                    |o| split(&o),
+                ),
+                trials,
+                seed,
+                jobs: jobs
+                    .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+                out,
+                snapshots,
+                hands_dir,
+                objects_dir,
+                options: opts,
+            };
+            let report = run_bench(&config, &service)?;
+            println!("{}", report.markdown);
+        }
+    }
+    Ok(())
+}

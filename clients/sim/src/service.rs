@@ -1,0 +1,225 @@
+//! The gRPC side: graspd-sim talks to a running graspd only over its public API, as a robot stack
+//! does (GetHand / RegisterHand for the hand model, PlanGrasp with the rendered RGB-D frame).
+
+use crate::SimError;
+use crate::camera::RgbdImage;
+use crate::hand::SimHand;
+use graspd_proto::v1 as pb;
+use graspd_proto::v1::grasp_planner_client::GraspPlannerClient;
+use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion};
+use std::path::Path;
+use tonic::transport::Channel;
+
+/// A connected client plus the runtime its calls block on (trials run on plain threads).
+#[derive(Clone)]
+pub struct Service {
+    client: GraspPlannerClient<Channel>,
+    rt: tokio::runtime::Handle,
+}
+
+/// What a trial needs from a plan.
+#[derive(Debug, Clone)]
+pub struct PlanResult {
+    pub response: pb::PlanGraspResponse,
+    /// Round-trip latency of the PlanGrasp call, s.
+    pub latency: f64,
+}
+
+impl Service {
+    /// Connects to `addr` (e.g. `http://127.0.0.1:50051`) on the runtime `rt`.
+    pub fn connect(addr: &str, rt: tokio::runtime::Handle) -> Result<Self, SimError> {
+        let endpoint = Channel::from_shared(addr.to_string())
+            .map_err(|e| SimError::Input(format!("--graspd: {e}")))?;
+        let channel = rt
+            .block_on(endpoint.connect())
+            .map_err(|e| SimError::Service(format!("cannot connect to graspd at {addr}: {e}")))?;
+        let client = GraspPlannerClient::new(channel)
+            .max_decoding_message_size(64 << 20)
+            .max_encoding_message_size(64 << 20);
+        Ok(Service { client, rt })
+    }
+
+    /// Makes sure graspd knows the hand: GetHand, and RegisterHand with the model file and every
+    /// mesh beside it when it does not. Returns whether it registered.
+    pub fn ensure_hand(&self, hand: &SimHand, hands_dir: &Path) -> Result<bool, SimError> {
+        let mut c = self.client.clone();
+        let name = hand.graspd_hand.clone();
+        match self
+            .rt
+            .block_on(c.get_hand(pb::GetHandRequest { name: name.clone() }))
+        {
+            Ok(_) => return Ok(false),
+            Err(s) if s.code() == tonic::Code::NotFound => {}
+            Err(s) => return Err(SimError::Service(format!("GetHand {name}: {s}"))),
+        }
+        let model = hand.model_path(hands_dir);
+        let dir = model.parent().unwrap_or(Path::new("."));
+        let text = std::fs::read_to_string(&model)
+            .map_err(|e| SimError::Input(format!("hands: {}: {e}", model.display())))?;
+        let mut assets = Vec::new();
+        collect_assets(dir, dir, &mut assets)?;
+        let req = pb::RegisterHandRequest {
+            name: name.clone(),
+            model: Some(pb::HandModel {
+                format: "mjcf".into(),
+                text,
+                assets,
+                ..Default::default()
+            }),
+            ..Default::default()
+        };
+        self.rt
+            .block_on(c.register_hand(req))
+            .map_err(|s| SimError::Service(format!("RegisterHand {name}: {s}")))?;
+        Ok(true)
+    }
+
+    /// PlanGrasp on a rendered frame (or the object's cloud when `cloud` is given).
+    pub fn plan(
+        &self,
+        hand: &SimHand,
+        image: &RgbdImage,
+        cloud: Option<&[Point3<f64>]>,
+        seed: u64,
+    ) -> Result<PlanResult, tonic::Status> {
+        let mut c = self.client.clone();
+        let intr = image.intrinsics;
+        let input = match cloud {
+            Some(points) => {
+                let mut bytes = Vec::with_capacity(points.len() * 12);
+                for p in points {
+                    for v in [p.x, p.y, p.z] {
+                        bytes.extend_from_slice(&(v as f32).to_le_bytes());
+                    }
+                }
+                pb::plan_grasp_request::Input::Cloud(pb::PointCloud {
+                    points: bytes,
+                    normals: Vec::new(),
+                    frame_id: "world".into(),
+                })
+            }
+            None => pb::plan_grasp_request::Input::Rgbd(pb::RgbdFrame {
+                color: Some(pb::Image {
+                    width: intr.width,
+                    height: intr.height,
+                    encoding: "rgb8".into(),
+                    step: intr.width * 3,
+                    data: image.rgb.clone(),
+                }),
+                depth: Some(pb::Image {
+                    width: intr.width,
+                    height: intr.height,
+                    encoding: "32FC1".into(),
+                    step: intr.width * 4,
+                    data: image.depth.iter().flat_map(|d| d.to_le_bytes()).collect(),
+                }),
+                intrinsics: Some(pb::CameraIntrinsics {
+                    fx: intr.fx,
+                    fy: intr.fy,
+                    cx: intr.cx,
+                    cy: intr.cy,
+                }),
+                depth_scale: 1.0,
+                camera_to_world: Some(pose_to_proto(&image.camera_to_world)),
+            }),
+        };
+        let eye = image.camera_to_world.translation.vector;
+        let req = pb::PlanGraspRequest {
+            input: Some(input),
+            hand: Some(pb::plan_grasp_request::Hand::HandName(
+                hand.graspd_hand.clone(),
+            )),
+            options: Some(pb::PlannerOptions {
+                seed: Some(seed),
+                ..Default::default()
+            }),
+            hints: Some(pb::PlanHints {
+                viewpoint: cloud.map(|_| pb::Vec3 {
+                    x: eye.x,
+                    y: eye.y,
+                    z: eye.z,
+                }),
+                ..Default::default()
+            }),
+            ..Default::default()
+        };
+        let t0 = std::time::Instant::now();
+        let response = self.rt.block_on(c.plan_grasp(req))?.into_inner();
+        Ok(PlanResult {
+            response,
+            latency: t0.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// Every file under `dir` but documentation, as assets with paths relative to `base`.
+fn collect_assets(base: &Path, dir: &Path, out: &mut Vec<pb::HandAsset>) -> Result<(), SimError> {
+    let rd = std::fs::read_dir(dir)
+        .map_err(|e| SimError::Input(format!("hands: {}: {e}", dir.display())))?;
+    for e in rd.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            collect_assets(base, &p, out)?;
+            continue;
+        }
+        let ext = p
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or("")
+            .to_ascii_lowercase();
+        if !matches!(ext.as_str(), "stl" | "obj" | "msh" | "png" | "xml") {
+            continue;
+        }
+        let rel = p
+            .strip_prefix(base)
+            .unwrap_or(&p)
+            .to_string_lossy()
+            .into_owned();
+        let data = std::fs::read(&p)
+            .map_err(|e| SimError::Input(format!("hands: {}: {e}", p.display())))?;
+        out.push(pb::HandAsset { path: rel, data });
+    }
+    Ok(())
+}
+
+pub fn pose_to_proto(p: &Isometry3<f64>) -> pb::Pose {
+    let t = p.translation.vector;
+    let q = p.rotation;
+    pb::Pose {
+        position: Some(pb::Vec3 {
+            x: t.x,
+            y: t.y,
+            z: t.z,
+        }),
+        orientation: Some(pb::Quaternion {
+            x: q.i,
+            y: q.j,
+            z: q.k,
+            w: q.w,
+        }),
+    }
+}
+
+/// A pose from the wire (missing parts read as the identity).
+pub fn pose_from_proto(p: &Option<pb::Pose>) -> Option<Isometry3<f64>> {
+    let p = p.as_ref()?;
+    let t = p.position?;
+    let q = p.orientation?;
+    Some(Isometry3::from_parts(
+        Translation3::new(t.x, t.y, t.z),
+        UnitQuaternion::from_quaternion(Quaternion::new(q.w, q.x, q.y, q.z)),
+    ))
+}
+
+/// The grasp type's name as the API spells it in JSON (`large_wrap`, …).
+pub fn grasp_type_name(t: i32) -> &'static str {
+    match pb::GraspType::try_from(t).unwrap_or(pb::GraspType::Unspecified) {
+        pb::GraspType::LargeWrap => "large_wrap",
+        pb::GraspType::SmallWrap => "small_wrap",
+        pb::GraspType::Power => "power",
+        pb::GraspType::Pinch => "pinch",
+        pb::GraspType::Precision => "precision",
+        pb::GraspType::Tripod => "tripod",
+        pb::GraspType::Unspecified => "unspecified",
+    }
+}

@@ -1,0 +1,478 @@
+//! One grasp trial: render → PlanGrasp → pre-grasp → approach → close → lift → hold → shake,
+//! with the outcome classified.
+//!
+//! Protocol (all in simulated time, 2 ms steps):
+//! 1. the object is dropped 1 mm above the table at a seeded random spot (±[`PLACE_RANGE`]) and
+//!    yaw, and settles for 0.3 s while the hand is parked out of view;
+//! 2. the camera renders the scene and graspd plans on the frame (or on the object's cloud);
+//! 3. the base jumps to the pre-grasp pose (`pregrasp_pose × hand_pose⁻¹ × root_pose`) with the
+//!    fingers open (closing actuators at `open`, every other joint at its planned angle) and
+//!    holds 0.3 s;
+//! 4. approach: the base moves in a straight line to `root_pose` in [`APPROACH_S`];
+//! 5. close: closing actuators ramp in [`CLOSE_S`] from `open` to the planned joints plus the
+//!    hand's squeeze, then 0.4 s settle;
+//! 6. lift: the base rises [`LIFT_M`] in [`LIFT_S`]; hold [`HOLD_S`];
+//! 7. shake: [`SHAKE_S`] of a sinusoidal displacement of amplitude [`SHAKE_AMPLITUDE_M`] at
+//!    [`SHAKE_HZ`] along (1, 1, 0.5)/|·| (peak acceleration ≈ 3.2 m/s²), then 0.3 s still.
+//!
+//! Success: after the shake the object is at least [`LIFTED_M`] above where it stood and touches
+//! the hand. Failures, in the order they are checked: `no_plan` (PlanGrasp answered an error),
+//! `ik_collision` (graspd found no reachable, collision-free joints, or the approach pushed the
+//! object more than [`PUSH_M`]), `missed_contact` (after closing fewer than two hand bodies touch
+//! the object), `slipped_lift` (not lifted, or lost during the lift or the hold), `dropped_shake`.
+
+use crate::camera::{self, Intrinsics, RgbdImage};
+use crate::hand::SimHand;
+use crate::scene::{PARKED, Scene, from_mj, on_table, to_mj};
+use crate::service::{PlanResult, Service, grasp_type_name, pose_from_proto};
+use mujoco_rs::prelude::*;
+use nalgebra::{Isometry3, Point3, Vector3};
+use rand::{RngExt, SeedableRng};
+use serde::Serialize;
+
+pub const PLACE_RANGE: f64 = 0.05;
+pub const SETTLE_S: f64 = 0.3;
+pub const PRESHAPE_S: f64 = 0.3;
+pub const APPROACH_S: f64 = 0.6;
+pub const CLOSE_S: f64 = 0.5;
+pub const CLOSE_SETTLE_S: f64 = 0.4;
+pub const LIFT_M: f64 = 0.10;
+pub const LIFT_S: f64 = 1.0;
+pub const HOLD_S: f64 = 2.0;
+pub const SHAKE_S: f64 = 1.5;
+pub const SHAKE_HZ: f64 = 2.0;
+pub const SHAKE_AMPLITUDE_M: f64 = 0.02;
+/// Height the object must keep above its start to count as held, m.
+pub const LIFTED_M: f64 = 0.05;
+/// Object displacement before closing that counts as a collision, m.
+pub const PUSH_M: f64 = 0.03;
+
+/// How a trial ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    Success,
+    NoPlan,
+    IkCollision,
+    MissedContact,
+    SlippedLift,
+    DroppedShake,
+}
+
+impl Outcome {
+    pub const ALL: [Outcome; 6] = [
+        Outcome::Success,
+        Outcome::NoPlan,
+        Outcome::IkCollision,
+        Outcome::MissedContact,
+        Outcome::SlippedLift,
+        Outcome::DroppedShake,
+    ];
+    pub fn name(self) -> &'static str {
+        match self {
+            Outcome::Success => "success",
+            Outcome::NoPlan => "no_plan",
+            Outcome::IkCollision => "ik_collision",
+            Outcome::MissedContact => "missed_contact",
+            Outcome::SlippedLift => "slipped_lift",
+            Outcome::DroppedShake => "dropped_shake",
+        }
+    }
+}
+
+/// Options of a trial.
+#[derive(Debug, Clone, Copy)]
+pub struct TrialOptions {
+    pub intrinsics: Intrinsics,
+    pub camera: Isometry3<f64>,
+    /// Plan on the object's points instead of the RGB-D frame.
+    pub cloud_input: bool,
+    /// Render a snapshot with the hand after the hold, from this view.
+    pub snapshot: Option<(Intrinsics, Isometry3<f64>)>,
+}
+
+/// What one trial did.
+#[derive(Debug, Clone, Serialize)]
+pub struct TrialRecord {
+    pub hand: String,
+    pub object: String,
+    pub seed: u64,
+    pub outcome: Outcome,
+    /// Detail of a failure.
+    pub detail: String,
+    pub grasp_type: Option<String>,
+    pub type_source: Option<String>,
+    pub feasible: Option<bool>,
+    pub infeasible_reason: Option<String>,
+    /// PlanGrasp round trip, ms.
+    pub plan_ms: Option<f64>,
+    /// graspd's own total, ms.
+    pub server_ms: Option<f64>,
+    pub render_ms: f64,
+    pub sim_ms: f64,
+    /// Object height above its start after the lift and at the end, m.
+    pub lift_height: Option<f64>,
+    pub final_height: Option<f64>,
+    /// Hand bodies touching the object after closing.
+    pub contact_bodies: Option<usize>,
+    /// Object placement (x, y, yaw).
+    pub placement: [f64; 3],
+    /// The snapshot after the hold (when asked for and the object got that far).
+    #[serde(skip)]
+    pub snapshot: Option<RgbdImage>,
+}
+
+/// A trial's state: the scene's data plus the commanded base pose.
+pub struct Trial<'a> {
+    pub scene: &'a Scene,
+    pub data: MjData<&'a MjModel>,
+}
+
+/// The seeded object placement: (x, y, yaw).
+pub fn placement(seed: u64) -> [f64; 3] {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x9e37_79b9_7f4a_7c15);
+    [
+        rng.random_range(-PLACE_RANGE..PLACE_RANGE),
+        rng.random_range(-PLACE_RANGE..PLACE_RANGE),
+        rng.random_range(-std::f64::consts::PI..std::f64::consts::PI),
+    ]
+}
+
+impl<'a> Trial<'a> {
+    /// Fresh data with object 0 at `place` and the hand parked; steps [`SETTLE_S`].
+    pub fn new(scene: &'a Scene, place: [f64; 3]) -> Self {
+        let mut data = scene.model.make_data();
+        let pose = on_table(place[0], place[1], place[2]);
+        let (p, q) = to_mj(&pose);
+        let a = scene.object_qpos[0];
+        data.qpos_mut()[a..a + 3].copy_from_slice(&p);
+        data.qpos_mut()[a + 3..a + 7].copy_from_slice(&q);
+        // Gravity compensation of the hand, as the arm carrying it would provide: every hand
+        // body gets its weight back at its centre of mass.
+        let g = scene.model.ffi().opt.gravity;
+        for (b, &is_hand) in scene.hand_bodies.iter().enumerate() {
+            if is_hand {
+                let m = scene.model.body_mass()[b];
+                data.xfrc_applied_mut()[b][..3].copy_from_slice(&[-m * g[0], -m * g[1], -m * g[2]]);
+            }
+        }
+        let mut t = Trial { scene, data };
+        t.place_base(&from_mj(&PARKED, &[1.0, 0.0, 0.0, 0.0]));
+        t.open_hand();
+        t.data.forward();
+        t.run(SETTLE_S, |_, _| {});
+        t
+    }
+
+    /// Steps for `seconds`, calling `each(trial, fraction)` before every step.
+    pub fn run(&mut self, seconds: f64, mut each: impl FnMut(&mut Self, f64)) {
+        let n = (seconds / self.scene.model.ffi().opt.timestep)
+            .round()
+            .max(1.0) as usize;
+        for i in 0..n {
+            each(self, (i + 1) as f64 / n as f64);
+            self.data.step();
+        }
+    }
+
+    /// Commands the closing actuators to open.
+    fn open_hand(&mut self) {
+        for &(a, open, _) in &self.scene.closing {
+            self.data.ctrl_mut()[a] = open;
+        }
+    }
+
+    /// Puts the base and its target at `pose` at rest (a jump, before anything touches).
+    pub fn place_base(&mut self, pose: &Isometry3<f64>) {
+        self.set_base(pose);
+        let (p, q) = to_mj(pose);
+        let (a, v) = (self.scene.base_qpos, self.scene.base_dof);
+        self.data.qpos_mut()[a..a + 3].copy_from_slice(&p);
+        self.data.qpos_mut()[a + 3..a + 7].copy_from_slice(&q);
+        self.data.qvel_mut()[v..v + 6].fill(0.0);
+    }
+
+    /// Sets the base's target (mocap) pose; the weld pulls the base there.
+    pub fn set_base(&mut self, pose: &Isometry3<f64>) {
+        let (p, q) = to_mj(pose);
+        let m = self.scene.mount_mocap;
+        self.data.mocap_pos_mut()[m] = p;
+        self.data.mocap_quat_mut()[m] = q;
+    }
+
+    /// Object 0's position.
+    pub fn object_position(&self) -> Point3<f64> {
+        let a = self.scene.object_qpos[0];
+        let q = &self.data.qpos()[a..a + 3];
+        Point3::new(q[0], q[1], q[2])
+    }
+
+    /// Distinct hand bodies in contact with object 0.
+    pub fn hand_bodies_touching(&self) -> usize {
+        let m = &self.scene.model;
+        let obj = self.scene.object_bodies[0];
+        let bodyof = m.geom_bodyid();
+        let mut bodies: Vec<usize> = Vec::new();
+        for c in self.data.contact() {
+            let (g1, g2) = (c.geom[0] as usize, c.geom[1] as usize);
+            let (b1, b2) = (bodyof[g1] as usize, bodyof[g2] as usize);
+            let other = if b1 == obj {
+                b2
+            } else if b2 == obj {
+                b1
+            } else {
+                continue;
+            };
+            if self.scene.hand_bodies[other] && c.dist < 0.002 && !bodies.contains(&other) {
+                bodies.push(other);
+            }
+        }
+        bodies.len()
+    }
+
+    /// Renders the current state.
+    pub fn render(&mut self, intr: Intrinsics, camera: Isometry3<f64>) -> RgbdImage {
+        self.data.forward();
+        camera::render(self.scene, &mut self.data, intr, camera)
+    }
+
+    /// Closing commands: each closing actuator's command at the planned joints (the position
+    /// servo's equilibrium, `-bias₁·length/gain₀`), plus `squeeze` of its open → closed span,
+    /// clamped to the span. Every other actuator: its command at the planned joints.
+    fn planned_commands(&mut self, joints: &[(String, f64)], squeeze: f64) -> Vec<f64> {
+        let saved: Vec<f64> = self.data.qpos().to_vec();
+        self.set_hand_joints(joints);
+        self.data.forward();
+        let m = &self.scene.model;
+        let nu = m.ffi().nu as usize;
+        let len = self.data.actuator_length().to_vec();
+        let (gain, bias) = (m.actuator_gainprm(), m.actuator_biasprm());
+        let mut cmd: Vec<f64> = (0..nu)
+            .map(|a| {
+                let (g, b1) = (gain[a][0], bias[a][1]);
+                if g.abs() > 1e-12 && b1.abs() > 1e-12 {
+                    -b1 * len[a] / g
+                } else {
+                    len[a]
+                }
+            })
+            .collect();
+        for &(a, open, closed) in &self.scene.closing {
+            let (lo, hi) = (open.min(closed), open.max(closed));
+            cmd[a] = (cmd[a] + squeeze * (closed - open)).clamp(lo, hi);
+        }
+        let range = m.actuator_ctrlrange();
+        for (a, c) in cmd.iter_mut().enumerate() {
+            if range[a][0] < range[a][1] {
+                *c = c.clamp(range[a][0], range[a][1]);
+            }
+        }
+        self.data.qpos_mut().copy_from_slice(&saved);
+        self.data.forward();
+        cmd
+    }
+
+    /// Sets the hand's joints by name (names as graspd lists them, i.e. the model's).
+    fn set_hand_joints(&mut self, joints: &[(String, f64)]) {
+        for (adr, name) in &self.scene.hand_joints {
+            if let Some((_, v)) = joints.iter().find(|(n, _)| n == name) {
+                self.data.qpos_mut()[*adr] = *v;
+            }
+        }
+    }
+}
+
+/// Runs one whole trial of `hand` on object 0 of `scene`.
+pub fn run_trial(
+    scene: &Scene,
+    hand: &SimHand,
+    object: &str,
+    service: &Service,
+    seed: u64,
+    opts: &TrialOptions,
+) -> TrialRecord {
+    let place = placement(seed);
+    let mut rec = TrialRecord {
+        hand: hand.name.clone(),
+        object: object.to_string(),
+        seed,
+        outcome: Outcome::NoPlan,
+        detail: String::new(),
+        grasp_type: None,
+        type_source: None,
+        feasible: None,
+        infeasible_reason: None,
+        plan_ms: None,
+        server_ms: None,
+        render_ms: 0.0,
+        sim_ms: 0.0,
+        lift_height: None,
+        final_height: None,
+        contact_bodies: None,
+        placement: place,
+        snapshot: None,
+    };
+    let t_sim = std::time::Instant::now();
+    let mut trial = Trial::new(scene, place);
+    let start = trial.object_position();
+    let t_render = std::time::Instant::now();
+    let image = trial.render(opts.intrinsics, opts.camera);
+    let cloud = opts.cloud_input.then(|| {
+        let obj = scene.object_bodies[0];
+        image.points_of(|g| scene.model.geom_bodyid()[g] as usize == obj)
+    });
+    rec.render_ms = t_render.elapsed().as_secs_f64() * 1e3;
+    let mut sim_s = t_sim.elapsed().as_secs_f64() - rec.render_ms / 1e3;
+    let plan = service.plan(hand, &image, cloud.as_deref(), seed);
+    let t_sim = std::time::Instant::now();
+    let outcome = match plan {
+        Err(s) => {
+            rec.detail = format!("{}: {}", s.code(), s.message());
+            Outcome::NoPlan
+        }
+        Ok(plan) => execute(&mut trial, hand, &plan, start, opts, &mut rec),
+    };
+    rec.outcome = outcome;
+    sim_s += t_sim.elapsed().as_secs_f64();
+    rec.sim_ms = sim_s * 1e3;
+    rec
+}
+
+/// Steps 3–7 of the protocol on a plan.
+fn execute(
+    trial: &mut Trial,
+    hand: &SimHand,
+    plan: &PlanResult,
+    start: Point3<f64>,
+    opts: &TrialOptions,
+    rec: &mut TrialRecord,
+) -> Outcome {
+    let r = &plan.response;
+    rec.plan_ms = Some(plan.latency * 1e3);
+    rec.server_ms = r.timings.as_ref().map(|t| t.total * 1e3);
+    rec.grasp_type = Some(grasp_type_name(r.grasp_type).to_string());
+    rec.type_source = Some(r.type_source.clone());
+    rec.feasible = Some(r.feasible);
+    rec.infeasible_reason = r.infeasible_reason.clone();
+    let (Some(root), Some(hand_pose), Some(pre)) = (
+        pose_from_proto(&r.root_pose),
+        pose_from_proto(&r.hand_pose),
+        pose_from_proto(&r.pregrasp_pose),
+    ) else {
+        rec.detail = "the plan has no root_pose (the hand has no kinematics)".into();
+        return Outcome::NoPlan;
+    };
+    if !r.feasible {
+        let reason = r.infeasible_reason.clone().unwrap_or_default();
+        if reason.contains("reach") || reason.contains("collision") || reason.contains("joint") {
+            rec.detail = reason;
+            return Outcome::IkCollision;
+        }
+    }
+    let joints: Vec<(String, f64)> = r.joints.iter().map(|j| (j.name.clone(), j.angle)).collect();
+    let closed = trial.planned_commands(&joints, hand.squeeze);
+    // Pre-grasp: planned joints with the closing actuators' joints open.
+    let pre_root = pre * hand_pose.inverse() * root;
+    trial.set_hand_joints(&joints);
+    trial.open_hand();
+    for (a, c) in closed.iter().enumerate() {
+        if !trial.scene.closing.iter().any(|&(ca, _, _)| ca == a) {
+            trial.data.ctrl_mut()[a] = *c;
+        }
+    }
+    trial.place_base(&pre_root);
+    trial.data.forward();
+    trial.run(PRESHAPE_S, |_, _| {});
+    debug_snapshot(trial, "pregrasp");
+    // Approach along the straight line.
+    trial.run(APPROACH_S, |t, f| {
+        let p = pre_root.lerp_slerp(&root, f);
+        t.set_base(&p);
+    });
+    debug_snapshot(trial, "approached");
+    let pushed = (trial.object_position() - start).norm();
+    if pushed > PUSH_M {
+        rec.detail = format!("the approach pushed the object {:.0} mm", pushed * 1e3);
+        return Outcome::IkCollision;
+    }
+    // Close.
+    let open: Vec<f64> = trial.data.ctrl().to_vec();
+    let closing = trial.scene.closing.clone();
+    trial.run(CLOSE_S, |t, f| {
+        for &(a, _, _) in &closing {
+            t.data.ctrl_mut()[a] = open[a] + (closed[a] - open[a]) * f;
+        }
+    });
+    trial.run(CLOSE_SETTLE_S, |_, _| {});
+    debug_snapshot(trial, "closed");
+    let touching = trial.hand_bodies_touching();
+    rec.contact_bodies = Some(touching);
+    if touching < 2 {
+        rec.detail = format!("{touching} hand bodies touch the object after closing");
+        return Outcome::MissedContact;
+    }
+    // Lift and hold.
+    trial.run(LIFT_S, |t, f| {
+        let up = nalgebra::Translation3::new(0.0, 0.0, LIFT_M * smooth(f));
+        t.set_base(&(up * root));
+    });
+    debug_snapshot(trial, "lifted");
+    let height = |t: &Trial| t.object_position().z - start.z;
+    rec.lift_height = Some(height(trial));
+    let lifted = nalgebra::Translation3::new(0.0, 0.0, LIFT_M) * root;
+    trial.run(HOLD_S, |_, _| {});
+    if let Some((intr, view)) = opts.snapshot {
+        rec.snapshot = Some(trial.render(intr, view));
+    }
+    let held = |t: &Trial| height(t) >= LIFTED_M && t.hand_bodies_touching() >= 1;
+    if !held(trial) {
+        rec.final_height = Some(height(trial));
+        rec.detail = format!(
+            "object {:.0} mm above its start after the lift, {:.0} mm after the hold",
+            rec.lift_height.unwrap_or(0.0) * 1e3,
+            height(trial) * 1e3
+        );
+        return Outcome::SlippedLift;
+    }
+    // Shake.
+    let dir = Vector3::new(1.0, 1.0, 0.5).normalize();
+    trial.run(SHAKE_S, |t, f| {
+        let s = SHAKE_AMPLITUDE_M * (2.0 * std::f64::consts::PI * SHAKE_HZ * SHAKE_S * f).sin();
+        let d = nalgebra::Translation3::from(dir * s);
+        t.set_base(&(d * lifted));
+    });
+    trial.set_base(&lifted);
+    trial.run(0.3, |_, _| {});
+    rec.final_height = Some(height(trial));
+    if !held(trial) {
+        rec.detail = format!(
+            "object {:.0} mm above its start after the shake",
+            height(trial) * 1e3
+        );
+        return Outcome::DroppedShake;
+    }
+    Outcome::Success
+}
+
+/// With GRASPD_SIM_DEBUG_DIR set, saves a picture of each phase there (for looking at a trial).
+fn debug_snapshot(trial: &mut Trial, phase: &str) {
+    if let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") {
+        let view = camera::look_at(Point3::new(-0.35, -0.3, 0.3), Point3::new(0.0, 0.0, 0.06));
+        let img = trial.render(Intrinsics::kinect(480, 360), view);
+        let _ = crate::bench::save_png(
+            &img,
+            &std::path::Path::new(&dir).join(format!("{phase}.png")),
+        );
+    }
+}
+
+/// Smoothstep 0 → 1 (zero velocity at both ends).
+fn smooth(f: f64) -> f64 {
+    f * f * (3.0 - 2.0 * f)
+}
+
+/// The mocap pose of the base in the world.
+pub fn base_pose(trial: &Trial) -> Isometry3<f64> {
+    let m = trial.scene.mount_mocap;
+    from_mj(&trial.data.mocap_pos()[m], &trial.data.mocap_quat()[m])
+}
