@@ -126,7 +126,9 @@ pub fn run_bench(config: &BenchConfig, service: &Service) -> Result<BenchReport,
                         }
                         let mut rec = run_trial(&scene, hand, &obj.name, service, seed, &opts);
                         if let Some(img) = rec.snapshot.take() {
-                            let name = format!("{}_{}.png", hand.name, obj.name);
+                            // Taken after the hold; the name says how the trial ended.
+                            let name =
+                                format!("{}_{}_{}.png", hand.name, obj.name, rec.outcome.name());
                             if let Err(e) = save_png(&img, &config.out.join("snapshots").join(name))
                             {
                                 errors.lock().expect("errors").push(e);
@@ -279,6 +281,25 @@ fn markdown(report: &BenchReport, hands: &[SimHand]) -> String {
         );
     }
     let _ = writeln!(s);
+    let mut sources: BTreeMap<&str, usize> = BTreeMap::new();
+    for r in &report.records {
+        if let Some(t) = &r.type_source {
+            *sources.entry(t.as_str()).or_default() += 1;
+        }
+    }
+    let sources: Vec<String> = sources.iter().map(|(t, n)| format!("{t} {n}")).collect();
+    let feasible = report
+        .records
+        .iter()
+        .filter(|r| r.feasible == Some(true))
+        .count();
+    let _ = writeln!(
+        s,
+        "\nGrasp type decided by: {}. Plans graspd marked feasible: {feasible} of {} (the others \
+         were executed too).",
+        sources.join(", "),
+        report.records.len()
+    );
     let _ = writeln!(
         s,
         "\n{} trials per cell, seeds {}..{}, {} input ({}×{}), {} worker threads: {:.0} s wall, \

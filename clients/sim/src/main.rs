@@ -77,7 +77,8 @@ enum Command {
         /// Output folder.
         #[arg(long, default_value = "sim-results")]
         out: PathBuf,
-        /// PNG snapshots of the first trial of each hand and object.
+        /// PNG snapshots (after the hold) of the first trial of each hand and object, named
+        /// HAND_OBJECT_OUTCOME.png.
         #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
         snapshots: bool,
     },

@@ -15,10 +15,14 @@
 //! 7. shake: [`SHAKE_S`] of a sinusoidal displacement of amplitude [`SHAKE_AMPLITUDE_M`] at
 //!    [`SHAKE_HZ`] along (1, 1, 0.5)/|·| (peak acceleration ≈ 3.2 m/s²), then 0.3 s still.
 //!
+//! Plans that graspd marks infeasible are executed too (the record keeps `feasible` and the
+//! reason): the simulation, not the planner's own check, decides.
+//!
 //! Success: after the shake the object is at least [`LIFTED_M`] above where it stood and touches
-//! the hand. Failures, in the order they are checked: `no_plan` (PlanGrasp answered an error),
-//! `ik_collision` (graspd found no reachable, collision-free joints, or the approach pushed the
-//! object more than [`PUSH_M`]), `missed_contact` (after closing fewer than two hand bodies touch
+//! the hand. Failures, in the order they are checked: `no_plan` (PlanGrasp answered an error or
+//! the plan has no joints), `ik_collision` (at the end of the approach the hand is more than
+//! [`TABLE_PENETRATION_M`] into the table, or the approach pushed the object more than
+//! [`PUSH_M`]), `missed_contact` (after closing fewer than two hand bodies touch
 //! the object), `slipped_lift` (not lifted, or lost during the lift or the hold), `dropped_shake`.
 
 use crate::camera::{self, Intrinsics, RgbdImage};
@@ -46,6 +50,8 @@ pub const SHAKE_AMPLITUDE_M: f64 = 0.02;
 pub const LIFTED_M: f64 = 0.05;
 /// Object displacement before closing that counts as a collision, m.
 pub const PUSH_M: f64 = 0.03;
+/// Hand penetration into the table at the end of the approach that counts as a collision, m.
+pub const TABLE_PENETRATION_M: f64 = 0.005;
 
 /// How a trial ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
@@ -230,6 +236,21 @@ impl<'a> Trial<'a> {
         bodies.len()
     }
 
+    /// Deepest penetration of a hand geom into the table, m (0 when none touches).
+    pub fn deepest_table_penetration(&self) -> f64 {
+        let table = self.scene.table_geom;
+        self.data
+            .contact()
+            .iter()
+            .filter(|c| {
+                let (g1, g2) = (c.geom[0] as usize, c.geom[1] as usize);
+                (g1 == table && self.scene.is_hand_geom(g2))
+                    || (g2 == table && self.scene.is_hand_geom(g1))
+            })
+            .map(|c| -c.dist)
+            .fold(0.0, f64::max)
+    }
+
     /// Renders the current state.
     pub fn render(&mut self, intr: Intrinsics, camera: Isometry3<f64>) -> RgbdImage {
         self.data.forward();
@@ -362,13 +383,6 @@ fn execute(
         rec.detail = "the plan has no root_pose (the hand has no kinematics)".into();
         return Outcome::NoPlan;
     };
-    if !r.feasible {
-        let reason = r.infeasible_reason.clone().unwrap_or_default();
-        if reason.contains("reach") || reason.contains("collision") || reason.contains("joint") {
-            rec.detail = reason;
-            return Outcome::IkCollision;
-        }
-    }
     let joints: Vec<(String, f64)> = r.joints.iter().map(|j| (j.name.clone(), j.angle)).collect();
     let closed = trial.planned_commands(&joints, hand.squeeze);
     // Pre-grasp: planned joints with the closing actuators' joints open.
@@ -390,6 +404,11 @@ fn execute(
         t.set_base(&p);
     });
     debug_snapshot(trial, "approached");
+    let through = trial.deepest_table_penetration();
+    if through > TABLE_PENETRATION_M {
+        rec.detail = format!("the hand went {:.0} mm into the table", through * 1e3);
+        return Outcome::IkCollision;
+    }
     let pushed = (trial.object_position() - start).norm();
     if pushed > PUSH_M {
         rec.detail = format!("the approach pushed the object {:.0} mm", pushed * 1e3);

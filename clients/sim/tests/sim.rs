@@ -177,7 +177,7 @@ fn a_robotiq_trial_on_the_tomato_soup_can_succeeds_against_graspd() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
     assert_eq!(json["records"][0]["outcome"], "success");
-    let png = image::open(out.join("snapshots/robotiq_2f85_tomato_soup_can.png")).unwrap();
+    let png = image::open(out.join("snapshots/robotiq_2f85_tomato_soup_can_success.png")).unwrap();
     assert_eq!((png.width(), png.height()), (480, 360));
     let _ = std::fs::remove_dir_all(&out);
 }
