@@ -39,6 +39,9 @@ pub struct SimHand {
     pub root_body: String,
     /// Fraction of each closing actuator's open → closed span commanded past the planned joints.
     pub squeeze: f64,
+    /// Fraction of each closing actuator's span the pre-shape opens from the planned joints
+    /// (1: fully open).
+    pub preshape: f64,
     pub actuators: Vec<ClosingActuator>,
     /// Short name (`robotiq_2f85`, `barrett`, `shadow`, or the TOML's stem).
     #[serde(skip)]
@@ -66,9 +69,9 @@ impl SimHand {
         let mut hand: SimHand = toml::from_str(&text)
             .map_err(|e| SimError::Input(format!("hands: {name_or_path}: {e}")))?;
         hand.name = name;
-        if !(0.0..=1.0).contains(&hand.squeeze) {
+        if !(0.0..=1.0).contains(&hand.squeeze) || !(0.0..=1.0).contains(&hand.preshape) {
             return Err(SimError::Input(format!(
-                "hands: {name_or_path}: squeeze must be within [0, 1]"
+                "hands: {name_or_path}: squeeze and preshape must be within [0, 1]"
             )));
         }
         Ok(hand)

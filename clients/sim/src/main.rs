@@ -40,6 +40,9 @@ struct Cli {
     /// Plan on the object's points (a cloud) instead of the RGB-D frame.
     #[arg(long, global = true)]
     cloud: bool,
+    /// Extra PlanGrasp calls with other seeds when graspd marks a plan infeasible.
+    #[arg(long, default_value_t = 2, global = true)]
+    replans: usize,
     #[command(subcommand)]
     command: Command,
 }
@@ -119,6 +122,7 @@ fn real_main() -> Result<(), SimError> {
         intrinsics,
         camera: default_view(),
         cloud_input: cli.cloud,
+        replans: cli.replans,
         snapshot: None,
     };
     match cli.command {

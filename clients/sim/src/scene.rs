@@ -226,6 +226,7 @@ impl Scene {
             )?;
             closing.push((aid, a.open, a.closed));
         }
+
         Ok(Scene {
             model,
             object_bodies,

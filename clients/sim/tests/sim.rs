@@ -139,6 +139,7 @@ fn a_robotiq_trial_on_the_tomato_soup_can_succeeds_against_graspd() {
         intrinsics: Intrinsics::kinect(640, 480),
         camera: default_view(),
         cloud_input: false,
+        replans: 0,
         snapshot: None,
     };
     let rec = run_trial(&scene, &hand, "tomato_soup_can", &service, 0, &opts);
