@@ -43,6 +43,13 @@ pub struct SimHand {
     /// (1: fully open).
     pub preshape: f64,
     pub actuators: Vec<ClosingActuator>,
+    /// Bodies that carry a simulated BioTac (the finger pads), for the tactile closed loop; the
+    /// session's fingers are named after them.
+    #[serde(default)]
+    pub tactile_bodies: Vec<String>,
+    /// Sliding friction of those pads (their geoms' own), for sizing the grip force.
+    #[serde(default)]
+    pub pad_friction: Option<f64>,
     /// Short name (`robotiq_2f85`, `barrett`, `shadow`, or the TOML's stem).
     #[serde(skip)]
     pub name: String,

@@ -8,6 +8,7 @@ pub mod hand;
 pub mod object;
 pub mod scene;
 pub mod service;
+pub mod tactile;
 pub mod trial;
 
 /// Errors of graspd-sim; each names what it is about.

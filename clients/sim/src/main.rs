@@ -60,20 +60,38 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
+    /// The tactile closed loop under a disturbance: each trial once with graspd's Stabilize
+    /// setting the grip force and once at constant force; writes stabilize.json and
+    /// stabilize.md to --out.
+    Stabilize {
+        /// A hand with tactile_bodies (built-in: robotiq_2f85).
+        #[arg(long, default_value = "robotiq_2f85")]
+        hand: String,
+        #[command(flatten)]
+        runs: Runs,
+        /// Static safety factor of the initial grip force.
+        #[arg(long, default_value_t = 1.5)]
+        safety: f64,
+        /// Added load on the object at its full value, in object weights.
+        #[arg(long, default_value_t = 1.0)]
+        pulse: f64,
+        /// Time the load takes to rise to its full value, and then stays, s.
+        #[arg(long, default_value_t = 0.5)]
+        pulse_s: f64,
+        /// δf_s of the stabilized session, in units of f0 (slip raises the force to
+        /// (1 + this) · f0).
+        #[arg(long, default_value_t = 1.0)]
+        slip_gain: f64,
+        #[arg(long, default_value = "sim-results")]
+        out: PathBuf,
+    },
     /// Trials over hands × objects; writes results.json, table.md and snapshots to --out.
     Bench {
         /// Comma-separated hands.
         #[arg(long, default_value = "robotiq_2f85,barrett,shadow")]
         hands: String,
-        /// Comma-separated objects; default: the eight of the dissertation's Table 5.2.
-        #[arg(long)]
-        objects: Option<String>,
-        /// Trials per hand and object.
-        #[arg(long, default_value_t = 10)]
-        trials: usize,
-        /// Seed of the first trial (trial i uses seed + i).
-        #[arg(long, default_value_t = 0)]
-        seed: u64,
+        #[command(flatten)]
+        runs: Runs,
         /// Worker threads (default: the number of cores).
         #[arg(long)]
         jobs: Option<usize>,
@@ -85,6 +103,43 @@ enum Command {
         #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
         snapshots: bool,
     },
+}
+
+/// Which objects, how many trials each, from which seed.
+#[derive(clap::Args)]
+struct Runs {
+    /// Comma-separated objects; default: the eight of the dissertation's Table 5.2.
+    #[arg(long)]
+    objects: Option<String>,
+    /// Trials per hand and object.
+    #[arg(long, default_value_t = 10)]
+    trials: usize,
+    /// Seed of the first trial (trial i uses seed + i).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+}
+
+/// Comma-separated names, trimmed, empty ones dropped.
+fn split_names(s: &str) -> Vec<String> {
+    s.split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(String::from)
+        .collect()
+}
+
+impl Runs {
+    fn objects(&self) -> Vec<String> {
+        self.objects.as_deref().map_or_else(
+            || {
+                graspd_sim::object::TABLE_5_2
+                    .iter()
+                    .map(|s| s.to_string())
+                    .collect()
+            },
+            split_names,
+        )
+    }
 }
 
 fn parse_image(s: &str) -> Result<Intrinsics, SimError> {
@@ -139,35 +194,49 @@ fn real_main() -> Result<(), SimError> {
             let rec = run_trial(&scene, &hand, &object, &service, seed, &opts);
             println!("{}", serde_json::to_string_pretty(&rec).unwrap_or_default());
         }
+        Command::Stabilize {
+            hand,
+            runs,
+            safety,
+            pulse,
+            pulse_s,
+            slip_gain,
+            out,
+        } => {
+            let hand = SimHand::load(&hand)?;
+            service.ensure_hand(&hand, &hands_dir)?;
+            let dist = graspd_sim::tactile::Disturbance {
+                safety,
+                pulse,
+                pulse_s,
+                slip_gain,
+            };
+            let report = graspd_sim::tactile::run_protocol(
+                &hand,
+                &runs.objects(),
+                runs.trials,
+                runs.seed,
+                &dist,
+                &hands_dir,
+                &objects_dir,
+                &service,
+                &opts,
+                &out,
+            )?;
+            println!("{report}");
+        }
         Command::Bench {
             hands,
-            objects,
-            trials,
-            seed,
+            runs,
             jobs,
             out,
             snapshots,
         } => {
-            let split = |s: &str| {
-                s.split(',')
-                    .map(str::trim)
-                    .filter(|s| !s.is_empty())
-                    .map(String::from)
-                    .collect::<Vec<_>>()
-            };
             let config = BenchConfig {
-                hands: split(&hands),
-                objects: objects.map_or_else(
-                    || {
-                        graspd_sim::object::TABLE_5_2
-                            .iter()
-                            .map(|s| s.to_string())
-                            .collect()
-                    },
-                    |o| split(&o),
-                ),
-                trials,
-                seed,
+                hands: split_names(&hands),
+                objects: runs.objects(),
+                trials: runs.trials,
+                seed: runs.seed,
                 jobs: jobs
                     .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
                 out,

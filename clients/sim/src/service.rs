@@ -14,6 +14,7 @@ use tonic::transport::Channel;
 #[derive(Clone)]
 pub struct Service {
     client: GraspPlannerClient<Channel>,
+    channel: Channel,
     rt: tokio::runtime::Handle,
 }
 
@@ -33,10 +34,14 @@ impl Service {
         let channel = rt
             .block_on(endpoint.connect())
             .map_err(|e| SimError::Service(format!("cannot connect to graspd at {addr}: {e}")))?;
-        let client = GraspPlannerClient::new(channel)
+        let client = GraspPlannerClient::new(channel.clone())
             .max_decoding_message_size(64 << 20)
             .max_encoding_message_size(64 << 20);
-        Ok(Service { client, rt })
+        Ok(Service {
+            client,
+            channel,
+            rt,
+        })
     }
 
     /// Makes sure graspd knows the hand: GetHand, and RegisterHand with the model file and every
@@ -148,6 +153,60 @@ impl Service {
         Ok(PlanResult {
             response,
             latency: t0.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// An open `Stabilize` stream: one frame in, its setpoint out, in lockstep with the simulation.
+pub struct StabilizeStream {
+    tx: tokio::sync::mpsc::Sender<pb::StabilizeRequest>,
+    responses: tonic::Streaming<pb::StabilizationSetpoint>,
+    rt: tokio::runtime::Handle,
+}
+
+impl Service {
+    /// Opens a TactileStabilizer.Stabilize stream with `session` as its first message.
+    pub fn stabilize(&self, session: pb::TactileSession) -> Result<StabilizeStream, SimError> {
+        let channel = self.channel.clone();
+        let (tx, rx) = tokio::sync::mpsc::channel(4);
+        tx.try_send(pb::StabilizeRequest {
+            kind: Some(pb::stabilize_request::Kind::Session(session)),
+        })
+        .map_err(|e| SimError::Service(format!("Stabilize: {e}")))?;
+        let mut client =
+            graspd_proto::v1::tactile_stabilizer_client::TactileStabilizerClient::new(channel);
+        let responses = self
+            .rt
+            .block_on(client.stabilize(tokio_stream::wrappers::ReceiverStream::new(rx)))
+            .map_err(|s| SimError::Service(format!("Stabilize: {s}")))?
+            .into_inner();
+        Ok(StabilizeStream {
+            tx,
+            responses,
+            rt: self.rt.clone(),
+        })
+    }
+}
+
+impl StabilizeStream {
+    /// Sends one frame and waits for its setpoint.
+    pub fn frame(
+        &mut self,
+        frame: pb::TactileFrame,
+    ) -> Result<pb::StabilizationSetpoint, SimError> {
+        let tx = self.tx.clone();
+        let responses = &mut self.responses;
+        self.rt.block_on(async move {
+            tx.send(pb::StabilizeRequest {
+                kind: Some(pb::stabilize_request::Kind::Frame(frame)),
+            })
+            .await
+            .map_err(|_| SimError::Service("Stabilize: the stream closed".into()))?;
+            match responses.message().await {
+                Ok(Some(m)) => Ok(m),
+                Ok(None) => Err(SimError::Service("Stabilize: the stream ended".into())),
+                Err(s) => Err(SimError::Service(format!("Stabilize: {s}"))),
+            }
         })
     }
 }

@@ -136,6 +136,34 @@ pub struct TrialRecord {
     pub snapshot: Option<RgbdImage>,
 }
 
+impl TrialRecord {
+    /// A record before anything happened (outcome `no_plan` until set).
+    pub fn empty(hand: &SimHand, object: &str, seed: u64, place: [f64; 3]) -> Self {
+        TrialRecord {
+            hand: hand.name.clone(),
+            object: object.to_string(),
+            seed,
+            outcome: Outcome::NoPlan,
+            detail: String::new(),
+            grasp_type: None,
+            type_source: None,
+            feasible: None,
+            infeasible_reason: None,
+            plan_ms: None,
+            plan_attempts: 0,
+            replan_ms: 0.0,
+            server_ms: None,
+            render_ms: 0.0,
+            sim_ms: 0.0,
+            lift_height: None,
+            final_height: None,
+            contact_bodies: None,
+            placement: place,
+            snapshot: None,
+        }
+    }
+}
+
 /// A trial's state: the scene's data plus the commanded base pose.
 pub struct Trial<'a> {
     pub scene: &'a Scene,
@@ -338,28 +366,7 @@ pub fn run_trial(
     opts: &TrialOptions,
 ) -> TrialRecord {
     let place = placement(seed);
-    let mut rec = TrialRecord {
-        hand: hand.name.clone(),
-        object: object.to_string(),
-        seed,
-        outcome: Outcome::NoPlan,
-        detail: String::new(),
-        grasp_type: None,
-        type_source: None,
-        feasible: None,
-        infeasible_reason: None,
-        plan_ms: None,
-        plan_attempts: 0,
-        replan_ms: 0.0,
-        server_ms: None,
-        render_ms: 0.0,
-        sim_ms: 0.0,
-        lift_height: None,
-        final_height: None,
-        contact_bodies: None,
-        placement: place,
-        snapshot: None,
-    };
+    let mut rec = TrialRecord::empty(hand, object, seed, place);
     let t_sim = std::time::Instant::now();
     let mut trial = Trial::new(scene, place);
     let start = trial.object_position();
@@ -407,15 +414,25 @@ pub fn run_trial(
     rec
 }
 
-/// Steps 3–7 of the protocol on a plan.
-fn execute(
+/// What the approach leaves for the rest of a trial.
+pub struct Approached {
+    /// The base pose of the grasp (the plan's root_pose).
+    pub root: Isometry3<f64>,
+    /// Per actuator: its command at the planned joints plus the hand's squeeze.
+    pub closed: Vec<f64>,
+    /// The object's centre of mass before anything touched it.
+    pub start_com: Point3<f64>,
+}
+
+/// Steps 3–4 of the protocol: records the plan, pre-shapes at the pre-grasp pose and approaches;
+/// `Err` with the failure class when the plan has no joints or the approach collides.
+pub fn pre_grasp_and_approach(
     trial: &mut Trial,
     hand: &SimHand,
     plan: &PlanResult,
     start: Point3<f64>,
-    opts: &TrialOptions,
     rec: &mut TrialRecord,
-) -> Outcome {
+) -> Result<Approached, Outcome> {
     let r = &plan.response;
     trial.data.forward();
     let start_com = trial.object_com();
@@ -431,7 +448,7 @@ fn execute(
         pose_from_proto(&r.pregrasp_pose),
     ) else {
         rec.detail = "the plan has no root_pose (the hand has no kinematics)".into();
-        return Outcome::NoPlan;
+        return Err(Outcome::NoPlan);
     };
     let joints: Vec<(String, f64)> = r.joints.iter().map(|j| (j.name.clone(), j.angle)).collect();
     let closed = trial.planned_commands(&joints, hand.squeeze);
@@ -456,13 +473,37 @@ fn execute(
     let through = trial.deepest_table_penetration();
     if through > TABLE_PENETRATION_M {
         rec.detail = format!("the hand went {:.0} mm into the table", through * 1e3);
-        return Outcome::IkCollision;
+        return Err(Outcome::IkCollision);
     }
     let pushed = (trial.object_position() - start).norm();
     if pushed > PUSH_M {
         rec.detail = format!("the approach pushed the object {:.0} mm", pushed * 1e3);
-        return Outcome::IkCollision;
+        return Err(Outcome::IkCollision);
     }
+    Ok(Approached {
+        root,
+        closed,
+        start_com,
+    })
+}
+
+/// Steps 3–7 of the protocol on a plan.
+fn execute(
+    trial: &mut Trial,
+    hand: &SimHand,
+    plan: &PlanResult,
+    start: Point3<f64>,
+    opts: &TrialOptions,
+    rec: &mut TrialRecord,
+) -> Outcome {
+    let Approached {
+        root,
+        closed,
+        start_com,
+    } = match pre_grasp_and_approach(trial, hand, plan, start, rec) {
+        Ok(a) => a,
+        Err(o) => return o,
+    };
     // Close: the closing actuators ramp from the pre-shape to the planned joints plus the
     // squeeze. (A guarded close — each actuator holding at first touch, then all squeezing
     // together — was measured on the Table 5.2 run and did no better: 77.5 / 33.8 / 37.5 %.)

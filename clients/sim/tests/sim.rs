@@ -9,6 +9,7 @@ use graspd_sim::hand::SimHand;
 use graspd_sim::object::SimObject;
 use graspd_sim::scene::{PARKED, Scene, on_table};
 use graspd_sim::service::Service;
+use graspd_sim::tactile::{Disturbance, run_disturbance_trial};
 use graspd_sim::trial::{Outcome, Trial, TrialOptions, run_trial};
 use std::path::PathBuf;
 
@@ -28,13 +29,7 @@ fn testdata() -> Option<PathBuf> {
 fn a_scene_builds_and_steps_with_the_object_at_rest_on_the_table() {
     let Some(data) = testdata() else { return };
     let hand = SimHand::load("robotiq_2f85").unwrap();
-    let can = SimObject::load(&data.join("objects"), "tomato_soup_can").unwrap();
-    let scene = Scene::build(
-        &hand,
-        &data.join("hands"),
-        &[(&can, on_table(0.0, 0.0, 0.0))],
-    )
-    .unwrap();
+    let scene = can_scene(&data, &hand);
     let mut trial = Trial::new(&scene, [0.02, -0.01, 0.5]);
     trial.run(1.0, |_, _| {});
     let p = trial.object_position();
@@ -69,13 +64,7 @@ fn a_scene_builds_and_steps_with_the_object_at_rest_on_the_table() {
 fn the_camera_measures_depth_along_the_optical_axis() {
     let Some(data) = testdata() else { return };
     let hand = SimHand::load("robotiq_2f85").unwrap();
-    let can = SimObject::load(&data.join("objects"), "tomato_soup_can").unwrap();
-    let scene = Scene::build(
-        &hand,
-        &data.join("hands"),
-        &[(&can, on_table(0.0, 0.0, 0.0))],
-    )
-    .unwrap();
+    let scene = can_scene(&data, &hand);
     let intr = Intrinsics::kinect(641, 481); // odd sizes put a pixel exactly on the axis
     let centre = 240 * 641 + 320;
     let mut away = Trial::new(&scene, [0.3, 0.3, 0.0]);
@@ -128,20 +117,8 @@ fn a_robotiq_trial_on_the_tomato_soup_can_succeeds_against_graspd() {
         !service.ensure_hand(&hand, &data.join("hands")).unwrap(),
         "known now"
     );
-    let can = SimObject::load(&data.join("objects"), "tomato_soup_can").unwrap();
-    let scene = Scene::build(
-        &hand,
-        &data.join("hands"),
-        &[(&can, on_table(0.0, 0.0, 0.0))],
-    )
-    .unwrap();
-    let opts = TrialOptions {
-        intrinsics: Intrinsics::kinect(640, 480),
-        camera: default_view(),
-        cloud_input: false,
-        replans: 0,
-        snapshot: None,
-    };
+    let scene = can_scene(&data, &hand);
+    let opts = trial_options();
     let rec = run_trial(&scene, &hand, "tomato_soup_can", &service, 0, &opts);
     println!("{}", serde_json::to_string_pretty(&rec).unwrap());
     assert_eq!(rec.outcome, Outcome::Success, "{}", rec.detail);
@@ -181,6 +158,76 @@ fn a_robotiq_trial_on_the_tomato_soup_can_succeeds_against_graspd() {
     let png = image::open(out.join("snapshots/robotiq_2f85_tomato_soup_can_success.png")).unwrap();
     assert_eq!((png.width(), png.height()), (480, 360));
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The tactile closed loop against graspd's Stabilize stream: on the tomato soup can (seed 0)
+/// the constant-force grip loses the can under the added load, and the grip whose force graspd
+/// sets from the simulated BioTac readings keeps it — graspd reported slip and raised f_d.
+#[test]
+fn the_stabilized_grip_keeps_the_can_the_constant_grip_loses() {
+    let Some(data) = testdata() else { return };
+    let server = Server::start_with(&[
+        "--import-hand",
+        &format!(
+            "robotiq_2f85={}",
+            data.join("hands/robotiq_2f85/2f85.xml").display()
+        ),
+    ]);
+    let rt = tokio::runtime::Runtime::new().unwrap();
+    let service =
+        Service::connect(&format!("http://{}", server.grpc_addr), rt.handle().clone()).unwrap();
+    let hand = SimHand::load("robotiq_2f85").unwrap();
+    let scene = can_scene(&data, &hand);
+    let opts = trial_options();
+    let dist = Disturbance::default();
+    let run = |stabilized| {
+        run_disturbance_trial(
+            &scene,
+            &hand,
+            "tomato_soup_can",
+            &service,
+            0,
+            &opts,
+            &dist,
+            stabilized,
+        )
+        .unwrap()
+    };
+    let constant = run(false);
+    let stabilized = run(true);
+    println!("{constant:?}\n{stabilized:?}");
+    assert!(constant.reached_pulse && stabilized.reached_pulse);
+    assert!(
+        !constant.held,
+        "the constant grip held: the protocol tests nothing"
+    );
+    assert_eq!(constant.slip_frames, 0, "no stream in the baseline");
+    assert!(stabilized.held, "{}", stabilized.detail);
+    assert!(stabilized.slip_frames > 0);
+    assert!(stabilized.max_command > 1.5 * stabilized.f0);
+    assert!(stabilized.slid_mm < constant.slid_mm);
+}
+
+/// The tomato soup can on the table with `hand`.
+fn can_scene(data: &std::path::Path, hand: &SimHand) -> Scene {
+    let can = SimObject::load(&data.join("objects"), "tomato_soup_can").unwrap();
+    Scene::build(
+        hand,
+        &data.join("hands"),
+        &[(&can, on_table(0.0, 0.0, 0.0))],
+    )
+    .unwrap()
+}
+
+/// The default camera at 640×480, RGB-D input, no re-planning, no snapshot.
+fn trial_options() -> TrialOptions {
+    TrialOptions {
+        intrinsics: Intrinsics::kinect(640, 480),
+        camera: default_view(),
+        cloud_input: false,
+        replans: 0,
+        snapshot: None,
+    }
 }
 
 fn tempdir() -> PathBuf {
