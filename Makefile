@@ -3,7 +3,7 @@ CARGO ?= cargo
 # Extra flags for `make run`, e.g. make run ARGS="--rest-addr 127.0.0.1:8081 --log-format json"
 ARGS ?=
 
-.PHONY: build run test fmt lint fuzz models models-grasp-type models-tactile sim-bench
+.PHONY: build run test fmt lint fuzz models models-grasp-type models-tactile sim-bench sim-stabilize
 
 # The ONNX Runtime library that ort loads at run time (grasp-type model, docs/model-contract.md);
 # `run` and `test` fetch it first with scripts/fetch-onnxruntime.sh.
@@ -65,10 +65,12 @@ models-tactile:
 # The grasp benchmark in MuJoCo (clients/sim/README.md): starts a release graspd on loopback and
 # runs graspd-sim bench over the Table 5.2 objects with the Robotiq 2F-85, Barrett and Shadow
 # hands, 10 trials each; results in sim-results/.
+# `make sim-stabilize` runs the tactile closed loop against a constant-force baseline under an
+# added load (graspd-sim stabilize; results in sim-results/).
 SIM_ARGS ?=
-sim-bench: export ORT_DYLIB_PATH = $(CURDIR)/.tools/onnxruntime/libonnxruntime.so.1.31.1
-sim-bench:
+sim-bench sim-stabilize: export ORT_DYLIB_PATH = $(CURDIR)/.tools/onnxruntime/libonnxruntime.so.1.31.1
+sim-bench sim-stabilize:
 	scripts/fetch-onnxruntime.sh
 	scripts/fetch-mujoco.sh
 	$(CARGO) build --release --bin graspd --bin graspd-sim
-	scripts/sim-bench.sh $(SIM_ARGS)
+	scripts/sim-bench.sh $(patsubst sim-%,%,$@) $(SIM_ARGS)

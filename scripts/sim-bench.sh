@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Starts target/release/graspd on a free loopback port with the shared hands imported, runs
-# `graspd-sim bench` against it with the arguments given (default: the Table 5.2 run), and stops
-# the server. Called by `make sim-bench`.
+# `graspd-sim SUBCOMMAND ARGS...` against it (bench: the Table 5.2 run; stabilize: the tactile
+# closed loop under a disturbance), and stops the server. Called by `make sim-bench` and
+# `make sim-stabilize`.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 hands="$root/../shared/testdata/hands"
@@ -19,4 +20,4 @@ done
 addr="$(sed -n 's/^graspd listening grpc=\([^ ]*\).*/\1/p' "$log")"
 [ -n "$addr" ] || { cat "$log"; exit 1; }
 "$root/target/release/graspd-sim" --graspd "http://$addr" --testdata "$root/../shared/testdata" \
-    bench "$@"
+    "$@"
