@@ -29,7 +29,7 @@ struct Cli {
     /// Folder with hands/ and objects/ (../shared/testdata in a checkout).
     #[arg(
         long,
-        env = "GRASPD_SIM_TESTDATA",
+        env = "GRASPD_TESTDATA",
         default_value = "../shared/testdata",
         global = true
     )]

@@ -307,14 +307,14 @@ mod ycb_tests {
     use super::*;
 
     fn objects_dir() -> Option<PathBuf> {
-        let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/testdata/objects");
+        let d = graspd_testkit::testdata_dir().join("objects");
         d.is_dir().then_some(d)
     }
 
     #[test]
     fn tomato_soup_can_has_its_catalogue_size_and_a_plausible_density() {
         let Some(dir) = objects_dir() else {
-            eprintln!("skipped: ../shared/testdata/objects not found");
+            eprintln!("skipped: the shared test data's objects/ not found");
             return;
         };
         let can = SimObject::load(&dir, "tomato_soup_can").unwrap();

@@ -14,7 +14,7 @@ use graspd_sim::trial::{Outcome, Trial, TrialOptions, run_trial};
 use std::path::PathBuf;
 
 fn testdata() -> Option<PathBuf> {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/testdata");
+    let d = graspd_testkit::testdata_dir();
     if d.join("hands").is_dir() && d.join("objects").is_dir() {
         Some(d)
     } else {
