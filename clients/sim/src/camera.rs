@@ -137,14 +137,6 @@ pub fn render(
 }
 
 impl RgbdImage {
-    /// Depth as 16-bit millimetres (0 = invalid), for PNG snapshots.
-    pub fn depth_mm(&self) -> Vec<u16> {
-        self.depth
-            .iter()
-            .map(|&d| (d * 1000.0).round().clamp(0.0, 65535.0) as u16)
-            .collect()
-    }
-
     /// The object's points (pixels whose ray hit one of `geoms`) in the world, for plans from a
     /// cloud instead of the image.
     pub fn points_of(&self, is_object: impl Fn(usize) -> bool) -> Vec<Point3<f64>> {

@@ -6,7 +6,7 @@ use crate::SimError;
 use crate::hand::SimHand;
 use crate::object::SimObject;
 use mujoco_rs::prelude::*;
-use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -270,9 +270,4 @@ pub fn on_table(x: f64, y: f64, yaw: f64) -> Isometry3<f64> {
         Translation3::from(Vector3::new(x, y, 0.001)),
         UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw),
     )
-}
-
-/// A point as an array.
-pub fn arr(p: &Point3<f64>) -> [f64; 3] {
-    [p.x, p.y, p.z]
 }

@@ -272,13 +272,9 @@ pub fn pose_from_proto(p: &Option<pb::Pose>) -> Option<Isometry3<f64>> {
 
 /// The grasp type's name as the API spells it in JSON (`large_wrap`, …).
 pub fn grasp_type_name(t: i32) -> &'static str {
-    match pb::GraspType::try_from(t).unwrap_or(pb::GraspType::Unspecified) {
-        pb::GraspType::LargeWrap => "large_wrap",
-        pb::GraspType::SmallWrap => "small_wrap",
-        pb::GraspType::Power => "power",
-        pb::GraspType::Pinch => "pinch",
-        pb::GraspType::Precision => "precision",
-        pb::GraspType::Tripod => "tripod",
-        pb::GraspType::Unspecified => "unspecified",
-    }
+    // The wire enum numbers the types s = 1..6 in GraspType::ALL's order; 0 is unspecified.
+    (t as usize)
+        .checked_sub(1)
+        .and_then(|i| graspd_core::GraspType::ALL.get(i))
+        .map_or("unspecified", |g| g.name())
 }

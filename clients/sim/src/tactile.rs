@@ -191,27 +191,26 @@ fn point_velocity(trial: &Trial, b: usize, p: &Point3<f64>) -> Vector3<f64> {
 
 /// Drives the closing actuators as force sources toward actuator force `ft`.
 fn apply_actuator_force(trial: &mut Trial, ft: f64) {
-    let m = &trial.scene.model;
+    let scene = trial.scene;
+    let m = &scene.model;
     let (gain, bias, range) = (
         m.actuator_gainprm(),
         m.actuator_biasprm(),
         m.actuator_ctrlrange(),
     );
-    let (len, vel) = (
-        trial.data.actuator_length().to_vec(),
-        trial.data.actuator_velocity().to_vec(),
-    );
-    for &(a, open, closed) in &trial.scene.closing.clone() {
+    for &(a, open, closed) in &scene.closing {
+        let (len, vel) = (
+            trial.data.actuator_length()[a],
+            trial.data.actuator_velocity()[a],
+        );
         let g = gain[a][0];
+        // The force acts toward closed: negative when the span runs downward.
+        let f = if closed < open { -ft } else { ft };
         let mut c = if g.abs() > 1e-12 {
-            (ft - bias[a][1] * len[a] - bias[a][2] * vel[a]) / g
+            (f - bias[a][1] * len - bias[a][2] * vel) / g
         } else {
             closed
         };
-        // Toward closed when the span runs downward.
-        if closed < open {
-            c = -c;
-        }
         if range[a][0] < range[a][1] {
             c = c.clamp(range[a][0], range[a][1]);
         }
