@@ -66,7 +66,12 @@ def test_plans_on_a_numpy_cloud(server, hand, grasp_type, contacts):
     assert len(plan.contacts) == contacts
     for ct in plan.contacts:
         p = np.array([ct.position.x, ct.position.y, ct.position.z])
-        # Contacts are cloud points (float32 on the wire).
+        if ct.inferred:
+            # On the completed, unseen half of the can: near its true wall or lid.
+            wall = abs(np.hypot(p[0], p[1]) - 0.035)
+            assert p[0] < 0.0 and min(wall, abs(p[2] - 0.10)) < 0.01, p
+            continue
+        # Seen contacts are cloud points (float32 on the wire).
         assert np.linalg.norm(pts[ct.point_index] - p) < 1e-6
     assert plan.feasible or plan.infeasible_reason
     q = plan.hand_pose.orientation

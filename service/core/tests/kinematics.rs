@@ -378,17 +378,14 @@ fn overrides_pick_palm_fingers_and_thumb() {
     );
 }
 
-/// Lowest signed height along `n` of the hand's collision geometry (palm and below), computed
-/// straight from the geoms (mesh vertices, box corners, sphere/capsule/cylinder support points),
-/// independently of parry.
+/// Lowest signed height along `n` of the model's collision geometry (every body: the mounted
+/// model includes its wrist or flange), computed straight from the geoms (mesh vertices, box
+/// corners, sphere/capsule/cylinder support points), independently of parry.
 fn lowest_along(h: &KinematicHand, q: &[f64], n: &Vector3<f64>) -> f64 {
     let fk = h.tree.forward(q).unwrap();
     let root_in_hand = (fk.body_poses[h.palm] * h.hand_frame()).inverse();
     let mut lowest = f64::INFINITY;
     for (b, body) in h.tree.bodies.iter().enumerate() {
-        if b != h.palm && h.tree.path(h.palm, b).is_none() {
-            continue;
-        }
         for g in body.geoms.iter().filter(|g| g.collision) {
             let pose = root_in_hand * fk.body_poses[b] * g.pose;
             let d = pose.rotation.inverse() * -n; // direction of the support point, geom frame

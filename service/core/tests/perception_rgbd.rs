@@ -469,9 +469,20 @@ fn grasp_information_then_a_plan_for_each_table_5_2_object() {
                 kinematics: None,
             })
             .unwrap();
+            // Seen contacts on the mesh; those on the mirror-completed side near it (the YCB
+            // objects are only nearly symmetric).
             for c in &plan.contacts {
                 let d = r.distance_to_object(0, &c.position);
-                assert!(d <= 0.003, "{object}: contact {d} m off the mesh");
+                let limit = if c.inferred {
+                    graspd_testkit::ycb::MAX_INFERRED_OFF
+                } else {
+                    0.003
+                };
+                assert!(
+                    d <= limit,
+                    "{object}: contact {d} m off the mesh (inferred: {})",
+                    c.inferred
+                );
             }
             assert!(plan.collision.min_plane_clearance.is_some());
             eprintln!(

@@ -193,6 +193,20 @@ pub fn mesh(object: Object) -> Result<Arc<TriMesh>> {
     Ok(m)
 }
 
+/// How far a contact on the mirror-completed, unseen side (`Contact::inferred`) may lie from the
+/// true surface, m: the YCB objects are only nearly symmetric, and a flat object seen across its
+/// broad side is completed deeper than it is (the mustard bottle by about 2 cm; see
+/// docs/final-configuration.md, "Completing the unseen side").
+pub const MAX_INFERRED_OFF: f64 = 0.025;
+
+/// Distance of `p` (in the mesh's frame, the frame of the views) from `object`'s surface, m.
+pub fn surface_distance(object: Object, p: &nalgebra::Point3<f64>) -> f64 {
+    let m = mesh(object).unwrap_or_else(|e| panic!("{e}"));
+    use parry3d_f64::query::PointQuery;
+    m.distance_to_local_point(parry3d_f64::math::Vector::new(p.x, p.y, p.z), false)
+        .abs()
+}
+
 /// Axis-aligned bounding box of a mesh, (min, max).
 pub fn mesh_aabb(mesh: &TriMesh) -> (Point3<f64>, Point3<f64>) {
     let (lo, hi) = mesh.vertices().iter().fold(

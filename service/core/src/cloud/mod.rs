@@ -1,11 +1,13 @@
 //! Point clouds: the cloud type, k-NN normals, the support plane, and file formats.
 
+pub mod completion;
 pub mod io;
 pub mod normals;
 pub mod pca;
 pub mod plane;
 pub mod point_cloud;
 
+pub use completion::{Completion, mirror_completion};
 pub use normals::{
     CloudIndex, LazyNormals, Orientation, estimate_normals, knn_lists, normals_from_neighbours,
 };

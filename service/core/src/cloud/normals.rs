@@ -139,32 +139,47 @@ impl<'a> LazyNormals<'a> {
             let (_, cov) = super::pca::covariance(self.points, self.neighbours(i).iter().copied());
             let n = super::pca::smallest_axis(&cov);
             let p = self.points[i];
-            let out = match self.orient {
-                Orientation::TowardViewpoint(v) => v - p,
-                Orientation::AwayFromCentroid => p - self.centroid,
-            };
+            let out = self.orient.outward(i, &p, &self.centroid);
             if n.dot(&out) < 0.0 { -n } else { n }
         })
     }
 }
 
 /// Which way normals point.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Orientation {
     /// Toward a sensor at this position (single-view clouds: every point is seen from it).
     TowardViewpoint(Point3<f64>),
     /// Away from the cloud's centroid (whole-object clouds without a known sensor).
     AwayFromCentroid,
+    /// Points in consecutive ranges seen from different viewpoints (fused views, or a view and
+    /// its mirror completion): `(end, viewpoint)` pairs in ascending `end`, point i faces the
+    /// viewpoint of the first range with i < end (the last one beyond).
+    Views(std::sync::Arc<[(usize, Point3<f64>)]>),
+}
+
+impl Orientation {
+    /// The outward direction of point `i` at `p` (`centroid`: the cloud's).
+    pub fn outward(&self, i: usize, p: &Point3<f64>, centroid: &Point3<f64>) -> Vector3<f64> {
+        match self {
+            Orientation::TowardViewpoint(v) => v - p,
+            Orientation::AwayFromCentroid => p - centroid,
+            Orientation::Views(ranges) => {
+                let k = ranges.partition_point(|(end, _)| *end <= i);
+                match ranges.get(k).or(ranges.last()) {
+                    Some((_, v)) => v - p,
+                    None => p - centroid,
+                }
+            }
+        }
+    }
 }
 
 /// Flips normals so they point outward as `orient` says.
 pub fn orient_normals(points: &[Point3<f64>], normals: &mut [Vector3<f64>], orient: Orientation) {
     let c = super::point_cloud::centroid(points);
-    for (p, n) in points.iter().zip(normals.iter_mut()) {
-        let out = match orient {
-            Orientation::TowardViewpoint(v) => v - p,
-            Orientation::AwayFromCentroid => p - c,
-        };
+    for (i, (p, n)) in points.iter().zip(normals.iter_mut()).enumerate() {
+        let out = orient.outward(i, p, &c);
         if n.dot(&out) < 0.0 {
             *n = -*n;
         }

@@ -349,6 +349,27 @@ fn stage_one(
     result
 }
 
+/// Stage 1 alone, the front end of the final-configuration search of a hand with kinematics:
+/// the oppositions to try (best first), whether the best meets every stage-1 constraint, the
+/// stage's statistics, and why not when it does not.
+pub fn opposition_stage(
+    ctx: &SearchContext,
+    rng: &mut ChaCha8Rng,
+) -> (Vec<(usize, usize)>, bool, StageStats, Option<String>) {
+    let mut s1 = StageStats::default();
+    let (list, ok) = stage_one(ctx, rng, &mut s1);
+    let reason = if ok {
+        None
+    } else {
+        list.first().and_then(|c| {
+            OppositionSearch::new(ctx, 0.0)
+                .explain(c)
+                .map(|r| format!("stage 1: {r}"))
+        })
+    };
+    (list.iter().map(|c| (c[0], c[1])).collect(), ok, s1, reason)
+}
+
 /// Algorithm 4, lines 6–7 (or the ablation): the final contacts.
 pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome> {
     let mut s1 = StageStats::default();

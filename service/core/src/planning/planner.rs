@@ -3,7 +3,8 @@
 
 use super::dual_stage::{self, SearchOutcome};
 use super::ferrari_canny::{WrenchModel, ferrari_canny};
-use super::joint_configuration::{Effort, FingerTarget, KinematicModel, REACH_TOLERANCE};
+use super::final_configuration::{self, FinalConfiguration};
+use super::kinematic_model::KinematicModel;
 use super::object_shape::ObjectShape;
 use super::quality::ContactPoint;
 use super::search_context::SearchContext;
@@ -11,7 +12,7 @@ use super::type_rule;
 use super::types::*;
 use crate::cloud::{
     CloudIndex, LazyNormals, MIN_POINTS, Orientation, Plane, PointCloud, RansacParams,
-    detect_support_plane,
+    detect_support_plane, mirror_completion,
 };
 use crate::error::{FieldError, PlanError};
 use crate::grasp_type::{GraspType, HandPart};
@@ -100,6 +101,9 @@ impl PlannerOptions {
         }
         check_range("pregrasp_distance", self.pregrasp_distance, 0.0, 1.0)?;
         check_range("max_center_offset", self.max_center_offset, 0.0, 10.0)?;
+        usize_range("candidates", self.candidates, 1, 16)?;
+        check_range("squeeze_depth", self.squeeze_depth, 0.0, 0.05)?;
+        usize_range("final_candidates", self.final_candidates, 1, 200)?;
         Ok(())
     }
 }
@@ -110,8 +114,11 @@ struct Scene {
     source: PlaneSource,
     points: Vec<Point3<f64>>,
     normals: Option<Vec<Vector3<f64>>>,
-    /// Index of each kept point in the request's cloud.
+    /// Index of each kept point in the request's cloud (for a completed point: the one it
+    /// mirrors).
     original: Vec<usize>,
+    /// How many of `points` were seen (the rest complete the unseen side).
+    visible: usize,
 }
 
 fn separate_support_plane(
@@ -172,8 +179,42 @@ fn separate_support_plane(
             .normals
             .as_ref()
             .map(|n| original.iter().map(|&i| n[i]).collect()),
+        visible: original.len(),
         original,
     })
+}
+
+/// Adds the unseen side (`cloud::completion`) to the scene; returns the normals' orientation.
+fn complete_unseen(
+    scene: &mut Scene,
+    viewpoint: Option<Point3<f64>>,
+    up: Option<Vector3<f64>>,
+    enabled: bool,
+) -> Orientation {
+    let plain = match viewpoint {
+        Some(v) => Orientation::TowardViewpoint(v),
+        None => Orientation::AwayFromCentroid,
+    };
+    let (Some(v), Some(u), true) = (viewpoint, up, enabled) else {
+        return plain;
+    };
+    let Some(c) = mirror_completion(&scene.points, &v, &u, scene.plane.as_ref()) else {
+        return plain;
+    };
+    let h = c.mirror.normal;
+    if let Some(n) = &mut scene.normals {
+        let mirrored: Vec<Vector3<f64>> = c
+            .source
+            .iter()
+            .map(|&i| n[i] - h * (2.0 * n[i].dot(&h)))
+            .collect();
+        n.extend(mirrored);
+    }
+    let more: Vec<usize> = c.source.iter().map(|&i| scene.original[i]).collect();
+    scene.original.extend(more);
+    let orient = c.orientation(v);
+    scene.points = c.points;
+    orient
 }
 
 /// The most probable of `among` under `p` (ties: the first in the dissertation's order).
@@ -212,15 +253,13 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         .plane
         .map(|p| p.normal)
         .or(hints.up.and_then(|u| u.try_normalize(1e-9)));
+    let mut scene = scene;
+    let orient = complete_unseen(&mut scene, hints.viewpoint, up, options.complete_unseen);
     let points = &scene.points;
     let t_pre = t_start.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let index = CloudIndex::new(points);
-    let orient = match hints.viewpoint {
-        Some(v) => Orientation::TowardViewpoint(v),
-        None => Orientation::AwayFromCentroid,
-    };
     let normals = LazyNormals::new(
         points,
         &index,
@@ -325,18 +364,58 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         plane: scene.plane,
         options: &options,
         cos_friction: options.friction.atan().cos(),
-        kinematics: kinematics.as_deref(),
-        kinematic_checks: std::cell::Cell::new(0),
+        // A hand with kinematics is placed, closed and checked by the final-configuration
+        // search; its stage 1 does not pose the parametric hand.
+        collision_checks: options.check_collisions && kinematics.is_none(),
     };
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
-    let outcome = dual_stage::search(&ctx, &mut rng).ok_or_else(|| {
-        FieldError::new("cloud", "no candidate contacts near the attention point")
-    })?;
-
-    let t = Instant::now();
-    let mut plan = match kinematics.as_deref() {
-        None => assemble(&ctx, &outcome, &outcome.contacts, &scene, &options)?,
-        Some(model) => with_joints(&ctx, &outcome, &scene, &options, model)?,
+    let no_contacts = || FieldError::new("cloud", "no candidate contacts near the attention point");
+    let (mut plan, t) = match kinematics.as_deref() {
+        None => {
+            let outcome = dual_stage::search(&ctx, &mut rng).ok_or_else(no_contacts)?;
+            let t = Instant::now();
+            let mut plan = assemble(&ctx, &outcome, &outcome.contacts, &scene, &options)?;
+            plan.candidates = std::iter::once(&outcome.contacts)
+                .chain(&outcome.alternatives)
+                .take(options.candidates)
+                .map(|c| {
+                    if c == &outcome.contacts {
+                        Ok(GraspCandidate::of(&plan))
+                    } else {
+                        assemble(&ctx, &outcome, c, &scene, &options)
+                            .map(|p| GraspCandidate::of(&p))
+                    }
+                })
+                .collect::<Result<_, PlanError>>()?;
+            (plan, t)
+        }
+        Some(model) => {
+            let (oppositions, ok, s1, reason) = dual_stage::opposition_stage(&ctx, &mut rng);
+            if oppositions.is_empty() {
+                return Err(no_contacts().into());
+            }
+            let t = Instant::now();
+            let finals =
+                final_configuration::search(&ctx, model, &oppositions, options.candidates)?;
+            let s2 = StageStats {
+                solution_space: finals.len() as f64,
+                candidates: finals.len(),
+                iterations: finals.len(),
+                evaluations: finals.len(),
+                feasible_found: finals.iter().any(|f| f.feasible),
+                seconds: t.elapsed().as_secs_f64(),
+                ..Default::default()
+            };
+            let plan = final_plan(
+                &ctx,
+                &finals,
+                &scene,
+                model,
+                (s1, s2, ok, reason),
+                &oppositions,
+            )?;
+            (plan, t)
+        }
     };
     plan.grasp_type = grasp.grasp_type;
     plan.requested_type = requested;
@@ -349,8 +428,8 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         preprocess: t_pre,
         normals: t_normals,
         grasp_type: t_type,
-        stage1: outcome.stage1.seconds,
-        stage2: outcome.stage2.seconds,
+        stage1: plan.stage1.seconds,
+        stage2: plan.stage2.seconds,
         finalize: t.elapsed().as_secs_f64(),
         total: t_start.elapsed().as_secs_f64(),
     };
@@ -385,6 +464,8 @@ fn assemble(
             part: HandPart::Palm,
             point_index: scene.original[i],
             ik_residual: None,
+            inferred: i >= scene.visible,
+            link: None,
         });
     }
     for fc in ctx.finger_contacts(h1, h2, &frame) {
@@ -401,9 +482,20 @@ fn assemble(
             part,
             point_index: scene.original[fc.point],
             ik_residual: None,
+            inferred: fc.point >= scene.visible,
+            link: None,
         });
     }
     let cps: Vec<ContactPoint> = chosen.iter().map(|&i| ctx.contact(i)).collect();
+    let up = ctx.plane.map(|p| p.normal);
+    let rob = super::robustness::robustness(
+        &cps,
+        &ctx.shape.center,
+        ctx.shape.radius,
+        options.friction,
+        0.01,
+        up.as_ref(),
+    );
     let epsilon = ferrari_canny(
         &cps,
         &ctx.shape.center,
@@ -455,6 +547,10 @@ fn assemble(
         pregrasp_pose,
         joints: Vec::new(),
         root_pose: None,
+        pregrasp_joints: Vec::new(),
+        squeeze_joints: Vec::new(),
+        approach: Some(frame.z),
+        candidates: Vec::new(),
         quality: Quality {
             gii: s,
             reachability: assessment.r,
@@ -463,6 +559,8 @@ fn assemble(
             epsilon,
             aperture_or_area: assessment.a,
             palm_height: assessment.h,
+            robustness: rob.weakest,
+            gravity_resistance: rob.gravity,
         },
         feasible: out.feasible,
         infeasible_reason: out.reason.clone(),
@@ -480,118 +578,242 @@ fn assemble(
     })
 }
 
-/// How many of the search's configurations (the best, then its runners-up) are tried against
-/// the IK before the plan is declared unreachable.
-const IK_CANDIDATES: usize = 1 + super::dual_stage::MAX_ALTERNATIVES;
-
-/// The plan for a hand with known kinematics: the best configuration of the search whose
-/// contacts the fingers reach (IK residuals ≤ [`REACH_TOLERANCE`], jointly with a bounded palm
-/// correction) and whose posed hand is clear of the support plane and the cloud; else the first
-/// reachable one (reported as colliding); else the best, infeasible with the IK's reason. The
-/// joints, per-contact residuals, corrected hand pose and the kinematic collision figures of the
-/// final configuration go into the plan.
-fn with_joints(
+/// The plan of a hand with kinematics from its final configurations (best first; see
+/// `final_configuration`): the best becomes the plan, all of them its `candidates`. With none
+/// (no pre-shape, or no pose clear at the pre-grasp) the opposition is returned as an infeasible
+/// plan without joints.
+fn final_plan(
     ctx: &SearchContext,
-    out: &SearchOutcome,
+    finals: &[FinalConfiguration],
     scene: &Scene,
-    options: &PlannerOptions,
     model: &KinematicModel,
+    (s1, s2, stage1_ok, stage1_reason): (StageStats, StageStats, bool, Option<String>),
+    oppositions: &[(usize, usize)],
 ) -> Result<GraspPlan, PlanError> {
-    let candidates: Vec<&Vec<usize>> = std::iter::once(&out.contacts)
-        .chain(&out.alternatives)
-        .take(IK_CANDIDATES)
-        .collect();
-    let mut tried: Vec<(GraspPlan, super::JointConfiguration)> = Vec::new();
-    for chosen in candidates {
-        let plan = assemble(ctx, out, chosen, scene, options)?;
-        let targets: Vec<FingerTarget> = plan
-            .contacts
-            .iter()
-            .filter(|c| c.part != HandPart::Palm)
-            .map(|c| FingerTarget {
-                finger: c.finger.clone(),
-                position: c.position,
-                normal: c.normal,
-            })
-            .collect();
-        let joints = model.solve(
-            &targets,
-            &plan.hand_pose,
-            scene.plane.as_ref(),
-            ctx.points,
-            Effort::Final,
-            options.pregrasp_distance,
-        )?;
-        let done = joints.reachable && joints.clear();
-        tried.push((plan, joints));
-        if done || !out.feasible {
-            break;
-        }
+    let options = ctx.options;
+    let Some(best) = finals.first() else {
+        let (a, b) = oppositions[0];
+        let outcome = SearchOutcome {
+            contacts: vec![a, b],
+            k1: 1,
+            opposition: (a, b),
+            feasible: false,
+            reason: Some(stage1_reason.unwrap_or_else(|| {
+                format!(
+                    "no pose of the hand's model is clear of the table and the object at the \
+                     pre-grasp for {} (tried {} candidates)",
+                    ctx.grasp.grasp_type, options.final_candidates
+                )
+            })),
+            stage1: s1,
+            stage2: s2,
+            final_weights: options.stage2_weights,
+            alternatives: Vec::new(),
+        };
+        let mut plan = assemble(ctx, &outcome, &outcome.contacts, scene, options)?;
+        plan.feasible = false;
+        plan.candidates = vec![GraspCandidate::of(&plan)];
+        return Ok(plan);
+    };
+    let mut plans: Vec<GraspPlan> = Vec::with_capacity(finals.len());
+    for fc in finals {
+        plans.push(plan_of_final(ctx, fc, scene, model, s1, s2)?);
     }
-    let pick = tried
-        .iter()
-        .position(|(_, j)| j.reachable && j.clear())
-        .or_else(|| tried.iter().position(|(_, j)| j.reachable))
-        .unwrap_or(0);
-    let n_tried = tried.len();
-    let (mut plan, joints) = tried.swap_remove(pick);
-    let mut residuals = joints.residuals.iter();
-    for c in plan
-        .contacts
-        .iter_mut()
-        .filter(|c| c.part != HandPart::Palm)
+    let mut plan = plans[0].clone();
+    plan.candidates = plans.iter().map(GraspCandidate::of).collect();
+    if !best.feasible
+        && !stage1_ok
+        && let Some(r) = stage1_reason
     {
-        c.ik_residual = residuals.next().copied();
-    }
-    let approach = joints.hand_pose.orientation * Vector3::z();
-    plan.pregrasp_pose = Pose {
-        position: joints.hand_pose.position - approach * options.pregrasp_distance,
-        orientation: joints.hand_pose.orientation,
-    };
-    plan.hand_pose = joints.hand_pose;
-    plan.joints = joints.joints.clone();
-    plan.root_pose = Some(joints.root_pose);
-    let col = &mut plan.collision;
-    col.checked = options.check_collisions;
-    // The hand's own geometry replaces the parametric model's at every pose.
-    col.final_points_in_collision = joints.points_in_collision;
-    col.pregrasp_points_in_collision = joints.pregrasp_points_in_collision;
-    col.approach_points_in_collision = joints.approach_points_in_collision;
-    col.final_plane_clearance = joints.plane_clearance;
-    col.min_plane_clearance = match (joints.plane_clearance, joints.approach_plane_clearance) {
-        (Some(a), Some(b)) => Some(a.min(b)),
-        (a, b) => a.or(b),
-    };
-    col.clear = col.final_points_in_collision < super::collision::DEFAULT_MIN_POINTS
-        && col.pregrasp_points_in_collision < super::collision::DEFAULT_MIN_POINTS
-        && col.approach_points_in_collision < super::collision::DEFAULT_MIN_POINTS
-        && col
-            .min_plane_clearance
-            .is_none_or(|c| c >= -super::search_context::PLANE_TOLERANCE);
-    if plan.feasible && !joints.reachable {
-        plan.feasible = false;
         plan.infeasible_reason = Some(format!(
-            "IK: the fingers reach the contacts only within {:.1} mm (tolerance {:.0} mm) for the best {} configurations",
-            joints.worst_residual * 1e3,
-            REACH_TOLERANCE * 1e3,
-            n_tried
-        ));
-    } else if plan.feasible && options.check_collisions && !joints.clear() {
-        plan.feasible = false;
-        plan.infeasible_reason = Some(format!(
-            "the hand posed at the planned joints collides: {}",
-            joints.describe_collision()
-        ));
-    } else if !joints.approach_clear() {
-        plan.warnings.push(format!(
-            "the hand shaped as planned collides on its way in: {}",
-            joints.describe_collision()
-        ));
-    }
-    if pick > 0 {
-        plan.warnings.push(format!(
-            "the search's best {pick} configuration(s) were not reachable by the hand's kinematics; runner-up {pick} was taken"
+            "{}; {r}",
+            plan.infeasible_reason.unwrap_or_default()
         ));
     }
     Ok(plan)
+}
+
+/// One final configuration as a plan.
+fn plan_of_final(
+    ctx: &SearchContext,
+    fc: &FinalConfiguration,
+    scene: &Scene,
+    model: &KinematicModel,
+    stage1: StageStats,
+    stage2: StageStats,
+) -> Result<GraspPlan, PlanError> {
+    let options = ctx.options;
+    let hand = &model.hand;
+    let pose = |iso: &nalgebra::Isometry3<f64>| Pose {
+        position: Point3::from(iso.translation.vector),
+        orientation: iso.rotation,
+    };
+    let named = |q: &[f64]| -> Vec<(String, f64)> {
+        hand.tree
+            .joints
+            .iter()
+            .zip(q)
+            .map(|(j, v)| (j.name.clone(), *v))
+            .collect()
+    };
+    let mut contacts = Vec::with_capacity(fc.contacts.len());
+    for c in &fc.contacts {
+        let (finger, part) = match c.finger {
+            None => (PALM.to_string(), HandPart::Palm),
+            Some(f) => {
+                let kf = &hand.fingers[f];
+                let at_tip = c.body == kf.tip
+                    || hand.tree.bodies[kf.tip].parent == Some(c.body)
+                        && hand.tree.bodies[kf.tip].joints.is_empty();
+                let part = match (f == hand.thumb, at_tip) {
+                    (true, true) => HandPart::ThumbTip,
+                    (true, false) => HandPart::ThumbSurface,
+                    (false, true) => HandPart::FingerTip,
+                    (false, false) => HandPart::FingerSurface,
+                };
+                (kf.name.clone(), part)
+            }
+        };
+        contacts.push(Contact {
+            position: c.position,
+            normal: c.normal,
+            // The link's surface at the planned joints against the contact.
+            ik_residual: Some(c.gap),
+            finger,
+            part,
+            point_index: scene.original[c.point],
+            inferred: c.point >= scene.visible,
+            link: Some(hand.tree.bodies[c.body].name.clone()),
+        });
+    }
+    let cps: Vec<ContactPoint> = fc
+        .contacts
+        .iter()
+        .map(|c| ContactPoint {
+            position: c.position,
+            normal: c.normal,
+        })
+        .collect();
+    let epsilon = ferrari_canny(
+        &cps,
+        &ctx.shape.center,
+        ctx.shape.radius,
+        WrenchModel {
+            friction: options.friction,
+            edges: options.friction_cone_edges,
+            patch_radius: 0.01,
+        },
+    );
+    // R and G of Eq 5.4/5.5 on the configuration the hand takes.
+    let m = cps.len();
+    let centroid =
+        Point3::from(cps.iter().map(|c| c.position.coords).sum::<Vector3<f64>>() / m.max(1) as f64);
+    let a = if m <= 2 {
+        cps.first()
+            .zip(cps.last())
+            .map_or(0.0, |(x, y)| (y.position - x.position).norm())
+    } else {
+        let pts: Vec<Point3<f64>> = cps.iter().map(|c| c.position).collect();
+        super::quality::polygon_area(&pts)
+    };
+    let h = (centroid - Point3::from(fc.hand_pose.translation.vector))
+        .dot(&fc.approach)
+        .max(0.0);
+    let r = super::quality::reachability(a, h, ctx.hand.a_max(m), ctx.hand.geometry.max_height);
+    let (oc1, oc2) = fc.opposition;
+    let d = ctx.points[oc2] - ctx.points[oc1];
+    let g = if ctx.palm_opposition() {
+        super::quality::attention_palm(&ctx.n_att, &d)
+    } else {
+        super::quality::attention(&ctx.n_att, &d)
+    };
+    let w = options.stage2_weights;
+    // Collision counts of the chosen configuration, for the report.
+    let count =
+        |q: &[f64], at: &nalgebra::Isometry3<f64>| -> Result<(usize, Option<f64>), FieldError> {
+            let posed = model.collision.posed(hand, q, at)?;
+            Ok((
+                posed.points_inside(ctx.points, super::collision::DEFAULT_TOLERANCE, usize::MAX),
+                scene.plane.map(|pl| posed.plane_clearance(&pl)),
+            ))
+        };
+    let back = nalgebra::Translation3::from(-fc.approach * options.pregrasp_distance);
+    let half = nalgebra::Translation3::from(-fc.approach * options.pregrasp_distance * 0.5);
+    let pregrasp_iso = back * fc.hand_pose;
+    let (final_points, final_clearance) = count(&fc.grasp, &fc.hand_pose)?;
+    let (pre_points, pre_clearance) = count(&fc.pregrasp, &pregrasp_iso)?;
+    let (app_points, app_clearance) = count(&fc.pregrasp, &(half * fc.hand_pose))?;
+    let min_clearance = [fc.plane_clearance, pre_clearance, app_clearance]
+        .into_iter()
+        .flatten()
+        .reduce(f64::min);
+    let n = super::collision::DEFAULT_MIN_POINTS;
+    let collision = CollisionReport {
+        checked: true,
+        clear: final_points < n
+            && pre_points < n
+            && app_points < n
+            && min_clearance.is_none_or(|c| c >= -super::search_context::PLANE_TOLERANCE),
+        final_points_in_collision: final_points,
+        pregrasp_points_in_collision: pre_points,
+        approach_points_in_collision: app_points,
+        min_plane_clearance: min_clearance,
+        final_plane_clearance: final_clearance,
+    };
+    let mut warnings = Vec::new();
+    if fc.push > 0.002 {
+        warnings.push(format!(
+            "the linked fingers push the object {:.0} mm before both touch",
+            fc.push * 1e3
+        ));
+    }
+    let stage2 = StageStats { ..stage2 };
+    Ok(GraspPlan {
+        hand: ctx.hand.name.clone(),
+        grasp_type: GraspType::Pinch,
+        requested_type: GraspType::Pinch,
+        type_source: TypeSource::GeometricRule,
+        type_scores: [0.0; 6],
+        attention_point: ctx.p_att,
+        attention_normal: ctx.n_att,
+        opposition: Opposition {
+            h1: ctx.grasp.h1_part,
+            h2: ctx.grasp.h2_part,
+            points: [ctx.points[oc1], ctx.points[oc2]],
+            normals: [ctx.normals.get(oc1), ctx.normals.get(oc2)],
+        },
+        contacts,
+        hand_pose: pose(&fc.hand_pose),
+        pregrasp_pose: pose(&pregrasp_iso),
+        joints: named(&fc.grasp),
+        root_pose: Some(pose(&fc.root_pose)),
+        pregrasp_joints: named(&fc.pregrasp),
+        squeeze_joints: named(&fc.squeeze),
+        approach: Some(fc.approach),
+        candidates: Vec::new(),
+        quality: Quality {
+            gii: fc.gii,
+            reachability: r,
+            attention: g,
+            objective: w[0] * r + w[1] * g,
+            epsilon,
+            aperture_or_area: a,
+            palm_height: h,
+            robustness: fc.robustness.weakest,
+            gravity_resistance: fc.robustness.gravity,
+        },
+        feasible: fc.feasible,
+        infeasible_reason: fc.reason.clone(),
+        stage1,
+        stage2,
+        timings: Timings::default(),
+        collision,
+        support_plane: scene.plane,
+        plane_source: scene.source,
+        points_used: scene.visible,
+        mode: options.mode,
+        seed: options.seed,
+        warnings,
+        perception: None,
+    })
 }

@@ -5,7 +5,6 @@
 use super::annealing::Scored;
 use super::collision::{self, FingerContact, PosedHand};
 use super::hand_pose::{self, HandFrame, finger_frame, palm_frame};
-use super::joint_configuration::{Effort, FingerTarget, JointConfiguration, KinematicModel};
 use super::object_shape::ObjectShape;
 use super::quality::{self, ContactPoint};
 use super::types::{PlannerOptions, Pose};
@@ -18,7 +17,6 @@ use nalgebra::{Point3, Vector3};
 /// break a geometric limit below those that only miss S ≥ ε or collide.
 pub const MERIT_UNSTABLE: f64 = -5.0;
 pub const MERIT_COLLIDING: f64 = -6.0;
-pub const MERIT_UNREACHABLE: f64 = -7.0;
 pub const MERIT_GEOMETRY: f64 = -10.0;
 
 /// The planner's view of one request.
@@ -38,17 +36,11 @@ pub struct SearchContext<'a> {
     pub options: &'a PlannerOptions,
     /// cos(atan μ): the friction-cone half-angle test.
     pub cos_friction: f64,
-    /// The hand's kinematics, when known: the collision check of a full contact set is then IK
-    /// reachability plus the posed model's own geometry (see `joint_configuration`).
-    pub kinematics: Option<&'a KinematicModel>,
-    /// Kinematic checks made so far by the search (bounded by [`MAX_KINEMATIC_CHECKS`]).
-    pub kinematic_checks: std::cell::Cell<usize>,
+    /// Whether the search rejects configurations whose posed parametric hand collides (the
+    /// options' `check_collisions`; off for the stage 1 of a hand with kinematics, whose
+    /// final-configuration search places the real hand).
+    pub collision_checks: bool,
 }
-
-/// Most IK-and-collision checks one search makes (each new optimum of a full contact set costs
-/// one); past it, new optima count as unreachable, so that a search whose optima the hand cannot
-/// take stays within a bounded time.
-pub const MAX_KINEMATIC_CHECKS: usize = 48;
 
 /// A contact set assessed against the hand and Eq 5.2 (S and collision aside).
 #[derive(Debug, Clone)]
@@ -230,47 +222,11 @@ impl SearchContext<'_> {
                 feasible: false,
             };
         }
-        if a.q > best && self.options.check_collisions {
-            match (self.kinematics, c.len() == self.grasp.contact_count()) {
-                (Some(_), true) => match (self.kinematic_checks.get() < MAX_KINEMATIC_CHECKS)
-                    .then(|| {
-                        self.kinematic_checks.set(self.kinematic_checks.get() + 1);
-                        self.solve_joints(&c[..k1], &c[k1..], a, Effort::Search)
-                    })
-                    .flatten()
-                {
-                    Some(j) if !j.reachable => {
-                        return Scored {
-                            merit: MERIT_UNREACHABLE,
-                            feasible: false,
-                        };
-                    }
-                    Some(j) if j.clear() => {}
-                    None if self.kinematic_checks.get() >= MAX_KINEMATIC_CHECKS => {
-                        return Scored {
-                            merit: MERIT_UNREACHABLE,
-                            feasible: false,
-                        };
-                    }
-                    _ => {
-                        return Scored {
-                            merit: MERIT_COLLIDING,
-                            feasible: false,
-                        };
-                    }
-                },
-                // Stage 1 of a hand with more than two contacts: the opposition is virtual, no
-                // finger configuration exists yet; stage 2 checks the real one.
-                (Some(_), false) => {}
-                (None, _) => {
-                    if self.collides(&c[..k1], &c[k1..], a) {
-                        return Scored {
-                            merit: MERIT_COLLIDING,
-                            feasible: false,
-                        };
-                    }
-                }
-            }
+        if a.q > best && self.collision_checks && self.collides(&c[..k1], &c[k1..], a) {
+            return Scored {
+                merit: MERIT_COLLIDING,
+                feasible: false,
+            };
         }
         Scored {
             merit: a.q,
@@ -287,63 +243,13 @@ impl SearchContext<'_> {
         if s < self.options.epsilon {
             return Some(format!("S = {s:.3} < ε = {}", self.options.epsilon));
         }
-        if self.options.check_collisions {
-            if self.kinematics.is_some() {
-                if c.len() == self.grasp.contact_count() {
-                    let j = self.solve_joints(&c[..k1], &c[k1..], a, Effort::Search)?;
-                    if !j.reachable {
-                        return Some(format!(
-                            "IK: the fingers reach the contacts only within {:.1} mm",
-                            j.worst_residual * 1e3
-                        ));
-                    }
-                    if !j.clear() {
-                        return Some(format!(
-                            "the hand posed at the planned joints collides: {}",
-                            j.describe_collision()
-                        ));
-                    }
-                }
-                return None;
-            }
+        if self.collision_checks {
             let col = self.collisions(&c[..k1], &c[k1..], a)?;
             if !col.clear() {
                 return Some(col.describe());
             }
         }
         None
-    }
-
-    /// The joints of a hand with known kinematics for the assessed contact set (None for a
-    /// parametric hand, coinciding contacts or a solver error).
-    pub fn solve_joints(
-        &self,
-        h1: &[usize],
-        h2: &[usize],
-        a: &Assessment,
-        effort: Effort,
-    ) -> Option<JointConfiguration> {
-        let model = self.kinematics?;
-        let (pose, _, frame) = self.poses(a)?;
-        let targets: Vec<FingerTarget> = self
-            .finger_contacts(h1, h2, &frame)
-            .iter()
-            .map(|fc| FingerTarget {
-                finger: self.hand.fingers[fc.finger].name.clone(),
-                position: fc.position,
-                normal: fc.normal,
-            })
-            .collect();
-        model
-            .solve(
-                &targets,
-                &pose,
-                self.plane.as_ref(),
-                self.points,
-                effort,
-                self.options.pregrasp_distance,
-            )
-            .ok()
     }
 
     /// S of Eq 5.3 for the contacts (with a palm contact modelled as a soft contact too).

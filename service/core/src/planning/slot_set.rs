@@ -97,49 +97,65 @@ pub fn spread_subset(points: &[Point3<f64>], indices: &[usize], max: usize) -> V
     if indices.len() <= max || max == 0 {
         return indices.to_vec();
     }
+    let (lo, hi) = bounds(points, indices);
+    let diag = (hi - lo).norm().max(1e-6);
+    let mut cell = diag / (max as f64).sqrt();
+    loop {
+        let out = voxel_subset(points, indices, cell);
+        if out.len() <= max {
+            return out;
+        }
+        cell *= 1.2;
+    }
+}
+
+fn bounds(points: &[Point3<f64>], indices: &[usize]) -> (Point3<f64>, Point3<f64>) {
     let (mut lo, mut hi) = (points[indices[0]], points[indices[0]]);
     for &i in indices {
         lo = lo.inf(&points[i]);
         hi = hi.sup(&points[i]);
     }
-    let diag = (hi - lo).norm().max(1e-6);
-    let mut cell = diag / (max as f64).sqrt();
-    loop {
-        let mut cells: HashMap<[i64; 3], (nalgebra::Vector3<f64>, Vec<usize>)> = HashMap::new();
-        for &i in indices {
-            let p = points[i] - lo;
-            let key = [
-                (p.x / cell) as i64,
-                (p.y / cell) as i64,
-                (p.z / cell) as i64,
-            ];
-            let e = cells
-                .entry(key)
-                .or_insert((nalgebra::Vector3::zeros(), Vec::new()));
-            e.0 += points[i].coords;
-            e.1.push(i);
-        }
-        if cells.len() <= max {
-            let mut out: Vec<usize> = cells
-                .values()
-                .map(|(sum, members)| {
-                    let mean = sum / members.len() as f64;
-                    *members
-                        .iter()
-                        .min_by(|&&a, &&b| {
-                            (points[a].coords - mean)
-                                .norm_squared()
-                                .total_cmp(&(points[b].coords - mean).norm_squared())
-                                .then(a.cmp(&b))
-                        })
-                        .expect("non-empty cell")
-                })
-                .collect();
-            out.sort_unstable();
-            return out;
-        }
-        cell *= 1.2;
+    (lo, hi)
+}
+
+/// One of `indices` per occupied cell of a grid of side `cell` (the point nearest the cell's
+/// mean). Deterministic; the result is sorted.
+pub fn voxel_subset(points: &[Point3<f64>], indices: &[usize], cell: f64) -> Vec<usize> {
+    if indices.is_empty() {
+        return Vec::new();
     }
+    let (lo, _) = bounds(points, indices);
+    let mut cells: HashMap<[i64; 3], (nalgebra::Vector3<f64>, Vec<usize>)> = HashMap::new();
+    for &i in indices {
+        let p = points[i] - lo;
+        let key = [
+            (p.x / cell) as i64,
+            (p.y / cell) as i64,
+            (p.z / cell) as i64,
+        ];
+        let e = cells
+            .entry(key)
+            .or_insert((nalgebra::Vector3::zeros(), Vec::new()));
+        e.0 += points[i].coords;
+        e.1.push(i);
+    }
+    let mut out: Vec<usize> = cells
+        .values()
+        .map(|(sum, members)| {
+            let mean = sum / members.len() as f64;
+            *members
+                .iter()
+                .min_by(|&&a, &&b| {
+                    (points[a].coords - mean)
+                        .norm_squared()
+                        .total_cmp(&(points[b].coords - mean).norm_squared())
+                        .then(a.cmp(&b))
+                })
+                .expect("non-empty cell")
+        })
+        .collect();
+    out.sort_unstable();
+    out
 }
 
 #[cfg(test)]

@@ -75,6 +75,16 @@ pub struct PlannerOptions {
     /// Largest distance of the grasp centre from the object's estimated centre, perpendicular to
     /// the approach, as a fraction of the object's radius (S ignores where the mass is).
     pub max_center_offset: f64,
+    /// Complete a single view's unseen side by mirror symmetry (`cloud::completion`) when the
+    /// viewpoint and the up direction are known.
+    pub complete_unseen: bool,
+    /// Plans returned in `candidates`: the best this many distinct ones, ranked.
+    pub candidates: usize,
+    /// Hand with kinematics: how far the squeeze presses each contact into the object along its
+    /// normal, m.
+    pub squeeze_depth: f64,
+    /// Hand with kinematics: most candidate configurations judged (placed, closed, squeezed).
+    pub final_candidates: usize,
 }
 
 impl Default for PlannerOptions {
@@ -102,6 +112,10 @@ impl Default for PlannerOptions {
             check_collisions: true,
             detect_support_plane: true,
             max_center_offset: 0.6,
+            complete_unseen: true,
+            candidates: 1,
+            squeeze_depth: 0.01,
+            final_candidates: 16,
         }
     }
 }
@@ -169,10 +183,18 @@ pub struct Contact {
     pub part: HandPart,
     /// Index of the contact point in the request's cloud.
     pub point_index: usize,
-    /// For a hand with known kinematics: distance between the finger's contact point at the
-    /// planned joints and this contact (pad surface), m. None for the palm and parametric hands.
+    /// For a hand with known kinematics: distance between the surface of the touching link (a
+    /// finger's or the palm's) at the planned joints and this contact, m. None for parametric
+    /// hands.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ik_residual: Option<f64>,
+    /// The contact lies on the completed, unseen side (`point_index` is then the visible point
+    /// it mirrors).
+    #[serde(default)]
+    pub inferred: bool,
+    /// For a hand with known kinematics: the body (link) of the model that touches.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub link: Option<String>,
 }
 
 /// The pregrasping opposition O^s_{h1-h2}(C_o) (Definition 1, Eq 5.1).
@@ -200,6 +222,49 @@ pub struct Quality {
     /// Grasp opening a (m) or polygon area (m²) and palm height h (m) used by R.
     pub aperture_or_area: f64,
     pub palm_height: f64,
+    /// The force at the estimated centre of mass the contacts resist in their weakest axis
+    /// direction, in units of one contact's normal force (`planning::robustness`): what plans
+    /// are ranked by.
+    #[serde(default)]
+    pub robustness: f64,
+    /// The same straight down (gravity), when up is known.
+    #[serde(default)]
+    pub gravity_resistance: f64,
+}
+
+/// One ranked plan of `GraspPlan::candidates`: what a client needs to execute it or fall back.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GraspCandidate {
+    pub contacts: Vec<Contact>,
+    pub hand_pose: Pose,
+    pub pregrasp_pose: Pose,
+    pub root_pose: Option<Pose>,
+    pub approach: Option<Vector3<f64>>,
+    pub joints: Vec<(String, f64)>,
+    pub pregrasp_joints: Vec<(String, f64)>,
+    pub squeeze_joints: Vec<(String, f64)>,
+    pub quality: Quality,
+    pub feasible: bool,
+    pub infeasible_reason: Option<String>,
+}
+
+impl GraspCandidate {
+    /// The candidate that a plan itself is.
+    pub fn of(plan: &GraspPlan) -> Self {
+        Self {
+            contacts: plan.contacts.clone(),
+            hand_pose: plan.hand_pose,
+            pregrasp_pose: plan.pregrasp_pose,
+            root_pose: plan.root_pose,
+            approach: plan.approach,
+            joints: plan.joints.clone(),
+            pregrasp_joints: plan.pregrasp_joints.clone(),
+            squeeze_joints: plan.squeeze_joints.clone(),
+            quality: plan.quality,
+            feasible: plan.feasible,
+            infeasible_reason: plan.infeasible_reason.clone(),
+        }
+    }
 }
 
 /// Search statistics of one stage.
@@ -272,6 +337,19 @@ pub struct GraspPlan {
     /// when the hand's kinematics are known: where to mount the model to realise `hand_pose`.
     #[serde(default)]
     pub root_pose: Option<Pose>,
+    /// With kinematics: the joints of the pre-grasp (the opening the hand approaches with) and
+    /// of the squeeze (each contact pressed `squeeze_depth` into the object); `joints` are the
+    /// touching joints. Executed in that order: pre-grasp → grasp → squeeze.
+    #[serde(default)]
+    pub pregrasp_joints: Vec<(String, f64)>,
+    #[serde(default)]
+    pub squeeze_joints: Vec<(String, f64)>,
+    /// Unit direction the hand moves in from `pregrasp_pose` to `hand_pose`.
+    #[serde(default)]
+    pub approach: Option<Vector3<f64>>,
+    /// The best `options.candidates` distinct plans, ranked (the first is this plan).
+    #[serde(default)]
+    pub candidates: Vec<GraspCandidate>,
     pub quality: Quality,
     /// Whether S ≥ ε and every hard constraint held. When false, `infeasible_reason` says why and
     /// the plan is the best configuration found.

@@ -17,8 +17,8 @@ use graspd_core::perception::{
     TargetChoice, WireImage, camera_pose,
 };
 use graspd_core::planning::{
-    CollisionReport, Contact, Opposition, PlaneSource, PlannerMode, Pose, Quality, StageStats,
-    Timings, TypeSource,
+    CollisionReport, Contact, GraspCandidate, Opposition, PlaneSource, PlannerMode, Pose, Quality,
+    StageStats, Timings, TypeSource,
 };
 use graspd_core::tactile::{
     Baseline, ContactEvent, ControlMode, DesiredForceLaw, DetectorChoice, ElectrodePolarity,
@@ -422,6 +422,10 @@ pub fn options_from_proto(o: Option<pb::PlannerOptions>) -> Result<PlannerOption
         check_collisions: o.check_collisions.unwrap_or(d.check_collisions),
         detect_support_plane: o.detect_support_plane.unwrap_or(d.detect_support_plane),
         max_center_offset: o.max_center_offset.unwrap_or(d.max_center_offset),
+        complete_unseen: o.complete_unseen.unwrap_or(d.complete_unseen),
+        candidates: count(o.candidates, d.candidates),
+        squeeze_depth: o.squeeze_depth.unwrap_or(d.squeeze_depth),
+        final_candidates: count(o.final_candidates, d.final_candidates),
     })
 }
 
@@ -464,6 +468,10 @@ pub fn options_to_proto(o: &PlannerOptions) -> pb::PlannerOptions {
         check_collisions: diff(o.check_collisions, d.check_collisions),
         detect_support_plane: diff(o.detect_support_plane, d.detect_support_plane),
         max_center_offset: diff(o.max_center_offset, d.max_center_offset),
+        complete_unseen: diff(o.complete_unseen, d.complete_unseen),
+        candidates: diff(o.candidates, d.candidates).map(saturate),
+        squeeze_depth: diff(o.squeeze_depth, d.squeeze_depth),
+        final_candidates: diff(o.final_candidates, d.final_candidates).map(saturate),
     }
 }
 
@@ -713,6 +721,119 @@ fn stage_from_proto(s: Option<pb::StageStats>) -> StageStats {
     }
 }
 
+fn contact_to_proto(c: &Contact) -> pb::Contact {
+    pb::Contact {
+        position: Some(point_to_proto(&c.position)),
+        normal: Some(vec3_to_proto(&c.normal)),
+        finger: c.finger.clone(),
+        part: hand_part_to_proto(c.part) as i32,
+        point_index: c.point_index as u64,
+        ik_residual: c.ik_residual,
+        inferred: c.inferred,
+        link: c.link.clone().unwrap_or_default(),
+    }
+}
+
+fn contact_from_proto(c: &pb::Contact, at: &str) -> Result<Contact, FieldError> {
+    Ok(Contact {
+        position: point_from_proto(required(&c.position, &format!("{at}.position"))?),
+        normal: vec3_from_proto(required(&c.normal, &format!("{at}.normal"))?),
+        finger: c.finger.clone(),
+        part: hand_part_from_proto(c.part, &format!("{at}.part"))?,
+        point_index: c.point_index as usize,
+        ik_residual: c.ik_residual,
+        inferred: c.inferred,
+        link: (!c.link.is_empty()).then(|| c.link.clone()),
+    })
+}
+
+fn contacts_from_proto(cs: &[pb::Contact], field: &str) -> Result<Vec<Contact>, FieldError> {
+    cs.iter()
+        .enumerate()
+        .map(|(i, c)| contact_from_proto(c, &format!("{field}[{i}]")))
+        .collect()
+}
+
+fn joints_to_proto(j: &[(String, f64)]) -> Vec<pb::JointAngle> {
+    j.iter()
+        .map(|(name, angle)| pb::JointAngle {
+            name: name.clone(),
+            angle: *angle,
+        })
+        .collect()
+}
+
+fn joints_from_proto(j: Vec<pb::JointAngle>) -> Vec<(String, f64)> {
+    j.into_iter().map(|j| (j.name, j.angle)).collect()
+}
+
+fn quality_to_proto(q: &Quality) -> pb::Quality {
+    pb::Quality {
+        gii: q.gii,
+        reachability: q.reachability,
+        attention: q.attention,
+        objective: q.objective,
+        epsilon: q.epsilon,
+        aperture_or_area: q.aperture_or_area,
+        palm_height: q.palm_height,
+        robustness: q.robustness,
+        gravity_resistance: q.gravity_resistance,
+    }
+}
+
+fn quality_from_proto(q: pb::Quality) -> Quality {
+    Quality {
+        gii: q.gii,
+        reachability: q.reachability,
+        attention: q.attention,
+        objective: q.objective,
+        epsilon: q.epsilon,
+        aperture_or_area: q.aperture_or_area,
+        palm_height: q.palm_height,
+        robustness: q.robustness,
+        gravity_resistance: q.gravity_resistance,
+    }
+}
+
+fn optional_pose_from_proto(p: &Option<pb::Pose>, field: &str) -> Result<Option<Pose>, FieldError> {
+    match p {
+        Some(_) => pose_from_proto(p, field).map(Some),
+        None => Ok(None),
+    }
+}
+
+fn candidate_to_proto(c: &GraspCandidate) -> pb::GraspCandidate {
+    pb::GraspCandidate {
+        contacts: c.contacts.iter().map(contact_to_proto).collect(),
+        hand_pose: Some(pose_to_proto(&c.hand_pose)),
+        pregrasp_pose: Some(pose_to_proto(&c.pregrasp_pose)),
+        root_pose: c.root_pose.as_ref().map(pose_to_proto),
+        approach: c.approach.as_ref().map(vec3_to_proto),
+        joints: joints_to_proto(&c.joints),
+        pregrasp_joints: joints_to_proto(&c.pregrasp_joints),
+        squeeze_joints: joints_to_proto(&c.squeeze_joints),
+        quality: Some(quality_to_proto(&c.quality)),
+        feasible: c.feasible,
+        infeasible_reason: c.infeasible_reason.clone(),
+    }
+}
+
+fn candidate_from_proto(c: pb::GraspCandidate, at: &str) -> Result<GraspCandidate, FieldError> {
+    Ok(GraspCandidate {
+        contacts: contacts_from_proto(&c.contacts, &format!("{at}.contacts"))?,
+        hand_pose: pose_from_proto(&c.hand_pose, &format!("{at}.hand_pose"))?,
+        pregrasp_pose: pose_from_proto(&c.pregrasp_pose, &format!("{at}.pregrasp_pose"))?,
+        root_pose: optional_pose_from_proto(&c.root_pose, &format!("{at}.root_pose"))?,
+        approach: c.approach.as_ref().map(vec3_from_proto),
+        joints: joints_from_proto(c.joints),
+        pregrasp_joints: joints_from_proto(c.pregrasp_joints),
+        squeeze_joints: joints_from_proto(c.squeeze_joints),
+        quality: quality_from_proto(c.quality.unwrap_or_default()),
+        feasible: c.feasible,
+        infeasible_reason: c.infeasible_reason,
+    })
+}
+
 pub fn plan_to_proto(p: &GraspPlan) -> pb::PlanGraspResponse {
     let q = &p.quality;
     let t = &p.timings;
@@ -741,38 +862,16 @@ pub fn plan_to_proto(p: &GraspPlan) -> pb::PlanGraspResponse {
             points: p.opposition.points.iter().map(point_to_proto).collect(),
             normals: p.opposition.normals.iter().map(vec3_to_proto).collect(),
         }),
-        contacts: p
-            .contacts
-            .iter()
-            .map(|c| pb::Contact {
-                position: Some(point_to_proto(&c.position)),
-                normal: Some(vec3_to_proto(&c.normal)),
-                finger: c.finger.clone(),
-                part: hand_part_to_proto(c.part) as i32,
-                point_index: c.point_index as u64,
-                ik_residual: c.ik_residual,
-            })
-            .collect(),
+        contacts: p.contacts.iter().map(contact_to_proto).collect(),
         hand_pose: Some(pose_to_proto(&p.hand_pose)),
         pregrasp_pose: Some(pose_to_proto(&p.pregrasp_pose)),
         root_pose: p.root_pose.as_ref().map(pose_to_proto),
-        joints: p
-            .joints
-            .iter()
-            .map(|(name, angle)| pb::JointAngle {
-                name: name.clone(),
-                angle: *angle,
-            })
-            .collect(),
-        quality: Some(pb::Quality {
-            gii: q.gii,
-            reachability: q.reachability,
-            attention: q.attention,
-            objective: q.objective,
-            epsilon: q.epsilon,
-            aperture_or_area: q.aperture_or_area,
-            palm_height: q.palm_height,
-        }),
+        joints: joints_to_proto(&p.joints),
+        pregrasp_joints: joints_to_proto(&p.pregrasp_joints),
+        squeeze_joints: joints_to_proto(&p.squeeze_joints),
+        approach: p.approach.as_ref().map(vec3_to_proto),
+        candidates: p.candidates.iter().map(candidate_to_proto).collect(),
+        quality: Some(quality_to_proto(q)),
         feasible: p.feasible,
         infeasible_reason: p.infeasible_reason.clone(),
         stage1: Some(stage_to_proto(&p.stage1)),
@@ -833,18 +932,13 @@ pub fn plan_from_proto(p: pb::PlanGraspResponse) -> Result<GraspPlan, FieldError
                     format!("expected 6 values, got {}", v.len()),
                 )
             })?;
-    let mut contacts = Vec::with_capacity(p.contacts.len());
-    for (i, c) in p.contacts.iter().enumerate() {
-        let at = format!("contacts[{i}]");
-        contacts.push(Contact {
-            position: point_from_proto(required(&c.position, &format!("{at}.position"))?),
-            normal: vec3_from_proto(required(&c.normal, &format!("{at}.normal"))?),
-            finger: c.finger.clone(),
-            part: hand_part_from_proto(c.part, &format!("{at}.part"))?,
-            point_index: c.point_index as usize,
-            ik_residual: c.ik_residual,
-        });
-    }
+    let contacts = contacts_from_proto(&p.contacts, "contacts")?;
+    let candidates = p
+        .candidates
+        .into_iter()
+        .enumerate()
+        .map(|(i, c)| candidate_from_proto(c, &format!("candidates[{i}]")))
+        .collect::<Result<_, _>>()?;
     Ok(GraspPlan {
         hand: p.hand,
         grasp_type: required_grasp_type(p.grasp_type, "grasp_type")?,
@@ -868,20 +962,13 @@ pub fn plan_from_proto(p: pb::PlanGraspResponse) -> Result<GraspPlan, FieldError
         contacts,
         hand_pose: pose_from_proto(&p.hand_pose, "hand_pose")?,
         pregrasp_pose: pose_from_proto(&p.pregrasp_pose, "pregrasp_pose")?,
-        joints: p.joints.into_iter().map(|j| (j.name, j.angle)).collect(),
-        root_pose: match &p.root_pose {
-            Some(_) => Some(pose_from_proto(&p.root_pose, "root_pose")?),
-            None => None,
-        },
-        quality: Quality {
-            gii: q.gii,
-            reachability: q.reachability,
-            attention: q.attention,
-            objective: q.objective,
-            epsilon: q.epsilon,
-            aperture_or_area: q.aperture_or_area,
-            palm_height: q.palm_height,
-        },
+        joints: joints_from_proto(p.joints),
+        root_pose: optional_pose_from_proto(&p.root_pose, "root_pose")?,
+        pregrasp_joints: joints_from_proto(p.pregrasp_joints),
+        squeeze_joints: joints_from_proto(p.squeeze_joints),
+        approach: p.approach.as_ref().map(vec3_from_proto),
+        candidates,
+        quality: quality_from_proto(q),
         feasible: p.feasible,
         infeasible_reason: p.infeasible_reason,
         stage1: stage_from_proto(p.stage1),

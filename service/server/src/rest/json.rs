@@ -23,7 +23,8 @@ use graspd_core::perception::{
     camera_pose,
 };
 use graspd_core::planning::{
-    CollisionReport, PlaneSource, PlannerMode, Pose, Quality, StageStats, Timings, TypeSource,
+    CollisionReport, Contact, GraspCandidate, PlaneSource, PlannerMode, Pose, Quality, StageStats,
+    Timings, TypeSource,
 };
 use graspd_core::tactile::{
     Baseline, DesiredForceLaw, DetectorChoice, ElectrodePolarity, FingerReading, Frame,
@@ -613,6 +614,73 @@ pub struct ContactJson {
     /// IK residual (m) for a hand with known kinematics; absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ik_residual: Option<f64>,
+    /// On the completed, unseen side (`point_index` is the visible point it mirrors).
+    #[serde(default)]
+    pub inferred: bool,
+    /// Hands with kinematics: the body (link) of the model that touches.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub link: Option<String>,
+}
+
+impl From<&Contact> for ContactJson {
+    fn from(c: &Contact) -> Self {
+        Self {
+            position: (&c.position).into(),
+            normal: (&c.normal).into(),
+            finger: c.finger.clone(),
+            part: c.part,
+            point_index: c.point_index,
+            ik_residual: c.ik_residual,
+            inferred: c.inferred,
+            link: c.link.clone(),
+        }
+    }
+}
+
+fn joints_json(j: &[(String, f64)]) -> Vec<JointJson> {
+    j.iter()
+        .map(|(name, angle)| JointJson {
+            name: name.clone(),
+            angle: *angle,
+        })
+        .collect()
+}
+
+/// One ranked plan of `candidates`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct CandidateJson {
+    pub contacts: Vec<ContactJson>,
+    pub hand_pose: PoseJson,
+    pub pregrasp_pose: PoseJson,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub root_pose: Option<PoseJson>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub approach: Option<Vec3Json>,
+    pub joints: Vec<JointJson>,
+    pub pregrasp_joints: Vec<JointJson>,
+    pub squeeze_joints: Vec<JointJson>,
+    #[schema(value_type = QualityDoc)]
+    pub quality: Quality,
+    pub feasible: bool,
+    pub infeasible_reason: Option<String>,
+}
+
+impl From<&GraspCandidate> for CandidateJson {
+    fn from(c: &GraspCandidate) -> Self {
+        Self {
+            contacts: c.contacts.iter().map(Into::into).collect(),
+            hand_pose: (&c.hand_pose).into(),
+            pregrasp_pose: (&c.pregrasp_pose).into(),
+            root_pose: c.root_pose.as_ref().map(Into::into),
+            approach: c.approach.as_ref().map(Into::into),
+            joints: joints_json(&c.joints),
+            pregrasp_joints: joints_json(&c.pregrasp_joints),
+            squeeze_joints: joints_json(&c.squeeze_joints),
+            quality: c.quality,
+            feasible: c.feasible,
+            infeasible_reason: c.infeasible_reason.clone(),
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
@@ -643,6 +711,18 @@ pub struct PlanResponseJson {
     /// The model's root frame at the planned joints (hands with kinematics only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub root_pose: Option<PoseJson>,
+    /// Hands with kinematics: the pre-grasp opening and the squeeze (executed pre-grasp →
+    /// `joints` → squeeze).
+    #[serde(default)]
+    pub pregrasp_joints: Vec<JointJson>,
+    #[serde(default)]
+    pub squeeze_joints: Vec<JointJson>,
+    /// Unit direction from `pregrasp_pose` to `hand_pose`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub approach: Option<Vec3Json>,
+    /// The best `options.candidates` distinct plans, ranked; the first is this plan.
+    #[serde(default)]
+    pub candidates: Vec<CandidateJson>,
     #[schema(value_type = QualityDoc)]
     pub quality: Quality,
     pub feasible: bool,
@@ -752,29 +832,15 @@ impl From<&GraspPlan> for PlanResponseJson {
                 points: [(&o.points[0]).into(), (&o.points[1]).into()],
                 normals: [(&o.normals[0]).into(), (&o.normals[1]).into()],
             },
-            contacts: p
-                .contacts
-                .iter()
-                .map(|c| ContactJson {
-                    position: (&c.position).into(),
-                    normal: (&c.normal).into(),
-                    finger: c.finger.clone(),
-                    part: c.part,
-                    point_index: c.point_index,
-                    ik_residual: c.ik_residual,
-                })
-                .collect(),
+            contacts: p.contacts.iter().map(Into::into).collect(),
             hand_pose: (&p.hand_pose).into(),
             pregrasp_pose: (&p.pregrasp_pose).into(),
             root_pose: p.root_pose.as_ref().map(Into::into),
-            joints: p
-                .joints
-                .iter()
-                .map(|(name, angle)| JointJson {
-                    name: name.clone(),
-                    angle: *angle,
-                })
-                .collect(),
+            joints: joints_json(&p.joints),
+            pregrasp_joints: joints_json(&p.pregrasp_joints),
+            squeeze_joints: joints_json(&p.squeeze_joints),
+            approach: p.approach.as_ref().map(Into::into),
+            candidates: p.candidates.iter().map(Into::into).collect(),
             quality: p.quality,
             feasible: p.feasible,
             infeasible_reason: p.infeasible_reason.clone(),

@@ -369,6 +369,8 @@ doc_schema!(
             epsilon: 0.0,
             aperture_or_area: 0.0,
             palm_height: 0.0,
+            robustness: 0.0,
+            gravity_resistance: 0.0,
         },
         "Quality of the final grasp (graspd_core::planning::Quality)"
     )

@@ -7,10 +7,13 @@
 //! - a mesh becomes the convex hull of its vertices (a decomposed mesh, such as the Barrett's
 //!   `*_convex_decomposition_p*` parts, stays a union of hulls; a non-convex single mesh is
 //!   over-approximated by its hull); a flat mesh whose hull is degenerate becomes its bounding box;
-//! - bodies above the palm (a wrist, a forearm) belong to the arm and are left out.
+//! - every body of the model takes part, the ones above the palm too: a wrist, a forearm or a
+//!   flange is mounted with the hand and meets the table and the object like the fingers do.
 //!
-//! A posed hand answers the two questions of the planner's collision check: the least signed
-//! distance to the support plane, and how many cloud points lie deeper than a tolerance inside it.
+//! A posed hand answers the questions of the planner's collision checks: the least signed
+//! distance to the support plane, how many cloud points lie deeper than a tolerance inside it,
+//! and which points one piece touches (signed distance below a margin, found through the cloud's
+//! k-d tree within the piece's bounding sphere).
 
 use super::hand_model::KinematicHand;
 use super::kinematic_tree::GeomShape;
@@ -41,16 +44,32 @@ pub struct CollisionPiece {
     /// Pose of the shape in the body frame.
     pub pose: Isometry3<f64>,
     pub shape: SharedShape,
-    /// For a convex polyhedron: its face planes (outward unit normal n, offset d with n·x ≤ d
-    /// inside), in the shape's frame; the depth of an inside point is min over faces of d − n·x.
+    /// For a convex polyhedron or a box: its face planes (outward unit normal n, offset d with
+    /// n·x ≤ d inside), in the shape's frame; the depth of an inside point is min over faces of
+    /// d − n·x.
     pub faces: Option<FacePlanes>,
+    /// Bounding sphere in the body frame: centre and radius.
+    pub centre: Point3<f64>,
+    pub radius: f64,
 }
 
 /// Face planes (outward unit normal, offset) of a convex piece.
 pub type FacePlanes = Arc<[(PVec, f64)]>;
 
-/// The face planes of a convex polyhedron.
+/// The face planes of a convex polyhedron or a box.
 fn face_planes(shape: &SharedShape) -> Option<FacePlanes> {
+    if let Some(b) = shape.as_cuboid() {
+        let h = b.half_extents;
+        let planes: Vec<(PVec, f64)> = vec![
+            (PVec::X, h.x),
+            (-PVec::X, h.x),
+            (PVec::Y, h.y),
+            (-PVec::Y, h.y),
+            (PVec::Z, h.z),
+            (-PVec::Z, h.z),
+        ];
+        return Some(planes.into());
+    }
     let poly = shape.as_convex_polyhedron()?;
     let pts = poly.points();
     let adj = poly.vertices_adj_to_face();
@@ -86,16 +105,20 @@ pub struct HandCollision {
 pub struct PosedCollision {
     pieces: Vec<(Pose3, SharedShape)>,
     faces: Vec<Option<FacePlanes>>,
+    /// Bounding sphere of each piece in the world: centre and radius.
+    spheres: Vec<(Point3<f64>, f64)>,
+    /// The body of each piece.
+    bodies: Vec<usize>,
 }
 
 impl KinematicHand {
-    /// Builds the convex collision pieces of the palm and every body below it.
+    /// Builds the convex collision pieces of every body of the model.
     pub fn collision_model(&self) -> Result<HandCollision, FieldError> {
         let mut pieces = Vec::new();
-        let mut stack = vec![self.palm];
+        let mut stack = vec![0];
         while let Some(b) = stack.pop() {
             let body = &self.tree.bodies[b];
-            stack.extend(body.children.iter().copied());
+            stack.extend(body.children.iter().rev().copied());
             for g in body.geoms.iter().filter(|g| g.collision) {
                 let field = || format!("hand.bodies[{}].geoms", body.name);
                 let (shape, turn) = match &g.shape {
@@ -156,8 +179,17 @@ impl KinematicHand {
                     Some(r) => g.pose * r,
                     None => g.pose,
                 };
+                let aabb = shape.compute_local_aabb();
+                let (lo, hi) = (aabb.mins, aabb.maxs);
+                let local_centre = Point3::new(
+                    0.5 * (lo.x + hi.x),
+                    0.5 * (lo.y + hi.y),
+                    0.5 * (lo.z + hi.z),
+                );
                 pieces.push(CollisionPiece {
                     body: b,
+                    centre: pose * local_centre,
+                    radius: 0.5 * (hi - lo).length(),
                     pose,
                     faces: face_planes(&shape),
                     shape,
@@ -212,19 +244,29 @@ impl HandCollision {
         let fk = hand.tree.forward(q)?;
         // World ← hand frame ← palm body ← root.
         let root_in_world = hand_pose * (fk.body_poses[hand.palm] * hand.hand_frame).inverse();
-        Ok(PosedCollision {
-            pieces: self
-                .pieces
-                .iter()
-                .map(|p| {
-                    (
-                        pose3(&(root_in_world * fk.body_poses[p.body] * p.pose)),
-                        p.shape.clone(),
-                    )
-                })
-                .collect(),
+        Ok(self.posed_fk(&fk, &root_in_world))
+    }
+
+    /// Poses the pieces from a forward-kinematics result with the model's root at
+    /// `root_in_world`.
+    pub fn posed_fk(
+        &self,
+        fk: &super::ForwardKinematics,
+        root_in_world: &Isometry3<f64>,
+    ) -> PosedCollision {
+        let mut pieces = Vec::with_capacity(self.pieces.len());
+        let mut spheres = Vec::with_capacity(self.pieces.len());
+        for p in &self.pieces {
+            let body = root_in_world * fk.body_poses[p.body];
+            pieces.push((pose3(&(body * p.pose)), p.shape.clone()));
+            spheres.push((body * p.centre, p.radius));
+        }
+        PosedCollision {
+            pieces,
             faces: self.pieces.iter().map(|p| p.faces.clone()).collect(),
-        })
+            spheres,
+            bodies: self.pieces.iter().map(|p| p.body).collect(),
+        }
     }
 }
 
@@ -232,25 +274,8 @@ impl PosedCollision {
     /// Least signed distance of the hand geometry to `plane` (negative: through it), from each
     /// piece's support point against the plane normal.
     pub fn plane_clearance(&self, plane: &Plane) -> f64 {
-        let down = pv(&(-plane.normal));
-        self.pieces
-            .iter()
-            .map(|(pose, shape)| {
-                let p = match shape.as_support_map() {
-                    Some(s) => s.support_point(pose, down),
-                    None => {
-                        // Compound (degenerate-mesh box): its AABB's lowest corner.
-                        let aabb = shape.compute_aabb(pose);
-                        let pick = |lo: f64, hi: f64, d: f64| if d < 0.0 { lo } else { hi };
-                        PVec::new(
-                            pick(aabb.mins.x, aabb.maxs.x, down.x),
-                            pick(aabb.mins.y, aabb.maxs.y, down.y),
-                            pick(aabb.mins.z, aabb.maxs.z, down.z),
-                        )
-                    }
-                };
-                plane.distance(&Point3::new(p.x, p.y, p.z))
-            })
+        (0..self.pieces.len())
+            .map(|k| self.piece_plane_clearance(k, plane))
             .fold(f64::INFINITY, f64::min)
     }
 
@@ -291,6 +316,117 @@ impl PosedCollision {
             }
         }
         n
+    }
+
+    /// Signed distance of `p` to piece `k`: negative inside (minus the depth). For a polyhedron or
+    /// a box outside it, the largest face-plane distance, a lower bound of the distance (exact
+    /// off the faces, short of it near edges and corners).
+    pub fn signed_distance(&self, k: usize, p: &Point3<f64>) -> f64 {
+        let (pose, shape) = &self.pieces[k];
+        let v = PVec::new(p.x, p.y, p.z);
+        if let Some(faces) = &self.faces[k] {
+            let local = pose.inverse_transform_point(v);
+            return faces
+                .iter()
+                .map(|(n, d)| n.dot(local) - d)
+                .fold(f64::NEG_INFINITY, f64::max);
+        }
+        let proj = shape.project_point(pose, v, false);
+        let d = (proj.point - v).length();
+        if d.is_nan() {
+            // parry cannot project a ball's or capsule's exact centre: the deepest point.
+            return -self.spheres[k].1;
+        }
+        if proj.is_inside { -d } else { d }
+    }
+
+    /// [`Self::signed_distance`] when it is below `margin`, else None (polyhedra stop at the
+    /// first face the point is `margin` outside of).
+    pub fn signed_distance_below(&self, k: usize, p: &Point3<f64>, margin: f64) -> Option<f64> {
+        if let Some(faces) = &self.faces[k] {
+            let local = self.pieces[k]
+                .0
+                .inverse_transform_point(PVec::new(p.x, p.y, p.z));
+            let mut d = f64::NEG_INFINITY;
+            for (n, off) in faces.iter() {
+                let e = n.dot(local) - off;
+                if e >= margin {
+                    return None;
+                }
+                d = d.max(e);
+            }
+            return Some(d);
+        }
+        let d = self.signed_distance(k, p);
+        (d < margin).then_some(d)
+    }
+
+    /// The points of `points` (indexed by `index`) closer to piece `k` than `margin` (signed
+    /// distance < margin), with their signed distances.
+    pub fn touching(
+        &self,
+        k: usize,
+        points: &[Point3<f64>],
+        index: &crate::cloud::CloudIndex,
+        margin: f64,
+    ) -> Vec<(usize, f64)> {
+        let (c, r) = self.spheres[k];
+        index
+            .within_unsorted(&c, r + margin.max(0.0))
+            .into_iter()
+            .filter_map(|i| {
+                self.signed_distance_below(k, &points[i], margin)
+                    .map(|d| (i, d))
+            })
+            .collect()
+    }
+
+    /// Whether any of `points` (shifted by `offset`) is closer to piece `k` than `margin`.
+    pub fn any_within(
+        &self,
+        k: usize,
+        points: &[Point3<f64>],
+        index: &crate::cloud::CloudIndex,
+        margin: f64,
+        offset: &Vector3<f64>,
+    ) -> bool {
+        let (c, r) = self.spheres[k];
+        index
+            .within_unsorted(&(c + offset), r + margin.max(0.0))
+            .into_iter()
+            .any(|i| {
+                self.signed_distance_below(k, &(points[i] - offset), margin)
+                    .is_some()
+            })
+    }
+
+    /// The body piece `k` belongs to.
+    pub fn body_of(&self, k: usize) -> usize {
+        self.bodies[k]
+    }
+
+    /// The bounding sphere of piece `k` in the world: centre and radius.
+    pub fn sphere(&self, k: usize) -> (Point3<f64>, f64) {
+        self.spheres[k]
+    }
+
+    /// Least signed distance of piece `k` to `plane`.
+    pub fn piece_plane_clearance(&self, k: usize, plane: &Plane) -> f64 {
+        let (pose, shape) = &self.pieces[k];
+        let down = pv(&(-plane.normal));
+        let p = match shape.as_support_map() {
+            Some(s) => s.support_point(pose, down),
+            None => {
+                let aabb = shape.compute_aabb(pose);
+                let pick = |lo: f64, hi: f64, d: f64| if d < 0.0 { lo } else { hi };
+                PVec::new(
+                    pick(aabb.mins.x, aabb.maxs.x, down.x),
+                    pick(aabb.mins.y, aabb.maxs.y, down.y),
+                    pick(aabb.mins.z, aabb.maxs.z, down.z),
+                )
+            }
+        };
+        plane.distance(&Point3::new(p.x, p.y, p.z))
     }
 
     /// Number of posed pieces.

@@ -130,6 +130,16 @@ impl KinematicTree {
     /// what is close enough (sampling drops configurations above 1 mm). A no-op without
     /// constraints.
     pub fn project_constraints(&self, q: &mut [f64]) -> Result<f64, FieldError> {
+        self.project_constraints_holding(q, &[])
+    }
+
+    /// [`Self::project_constraints`] with the joints in `held` kept at their values (the driven
+    /// joints of a linkage: the others follow them).
+    pub fn project_constraints_holding(
+        &self,
+        q: &mut [f64],
+        held: &[usize],
+    ) -> Result<f64, FieldError> {
         if self.loop_closures.is_empty() && self.couplings.is_empty() {
             return Ok(0.0);
         }
@@ -143,7 +153,7 @@ impl KinematicTree {
             }
             let mut jac = nalgebra::DMatrix::zeros(m, n);
             let point_col = |b: usize, p: &Point3<f64>, j: usize| -> Vector3<f64> {
-                if !self.joint_moves(j, b) {
+                if held.contains(&j) || !self.joint_moves(j, b) {
                     return Vector3::zeros();
                 }
                 let (anchor, axis) = fk.joint_axes[j];
@@ -165,8 +175,12 @@ impl KinematicTree {
                 let d = q[c.joint2] - self.joints[c.joint2].reference;
                 let p = &c.polycoef;
                 let slope = p[1] + 2.0 * p[2] * d + 3.0 * p[3] * d * d + 4.0 * p[4] * d * d * d;
-                jac[(base + k, c.joint1)] += 1.0;
-                jac[(base + k, c.joint2)] -= slope;
+                if !held.contains(&c.joint1) {
+                    jac[(base + k, c.joint1)] += 1.0;
+                }
+                if !held.contains(&c.joint2) {
+                    jac[(base + k, c.joint2)] -= slope;
+                }
             }
             let a = &jac * jac.transpose() + nalgebra::DMatrix::identity(m, m) * 1e-8;
             let Some(w) = a.lu().solve(&r) else { break };

@@ -13,6 +13,7 @@
 //! # Ok::<(), graspd_core::FieldError>(())
 //! ```
 
+pub mod closing;
 pub mod collision_model;
 pub mod describe;
 pub mod forward_kinematics;
@@ -24,6 +25,7 @@ pub mod mjcf;
 pub mod urdf;
 mod xml;
 
+pub use closing::{FingerSynergy, FlexionJoint, HandSynergy, PreShape};
 pub use collision_model::{CollisionPiece, HandCollision, PosedCollision};
 pub use forward_kinematics::ForwardKinematics;
 pub use hand_model::{HandOverrides, KinematicFinger, KinematicHand};

@@ -1,0 +1,351 @@
+//! Closing the fingers onto the object, as the hand's servos will (GraspIt's "autograsp"): from
+//! the pre-shape every taking-part finger's flexion joints advance together along the synergy
+//! (s → 1). When a link meets the object (or the table) the joints that move it stop and the
+//! joints beyond it go on, so a finger wraps; a finger whose links all stop, or whose joints
+//! reach their closed limits, is done. Fingers tied by the model's constraints (a linkage) close
+//! with one s until every one of them touches; how far the first ones would then have pushed
+//! into the object is the group's `push`.
+//!
+//! Steps of 1/[`STEPS`] of the path, refined by [`BISECTIONS`] halvings at each first touch; a
+//! link touches when an object point is within [`TOUCH_MARGIN`] of it. The table does not stop a
+//! finger (fingertips slide along it, as they do on a real table); where the closed hand ends
+//! up below it, the caller raises the hand.
+
+use super::ObjectView;
+use crate::error::FieldError;
+use crate::hand::kinematics::{HandCollision, HandSynergy, KinematicHand, PosedCollision};
+use nalgebra::{Isometry3, Point3, Vector3};
+
+/// Steps along the whole closing path.
+pub const STEPS: usize = 24;
+/// Halvings of the step at a first touch.
+pub const BISECTIONS: usize = 4;
+/// A link touches the object when a point is closer than this, m.
+pub const TOUCH_MARGIN: f64 = 0.002;
+/// Points this close to a touching link make its contact patch, m.
+pub const PATCH_MARGIN: f64 = 0.004;
+
+/// One contact found by the sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepContact {
+    /// Kinematic finger index; None for the palm (or any body that is not a finger's).
+    pub finger: Option<usize>,
+    /// The touching body.
+    pub body: usize,
+    /// The object point nearest the link (index into the planner's cloud).
+    pub point: usize,
+    /// Mean of the patch's points and of their outward normals.
+    pub position: Point3<f64>,
+    pub normal: Vector3<f64>,
+    /// Distance from the link's surface to `position` (how well the link meets the contact), m.
+    pub gap: f64,
+}
+
+/// The result of closing.
+#[derive(Debug, Clone)]
+pub struct Closed {
+    /// Joints with every finger at its touch (the grasp configuration).
+    pub joints: Vec<f64>,
+    /// Per taking-part finger: the path parameter of each flexion joint at the end.
+    pub s: Vec<(usize, Vec<f64>)>,
+    pub contacts: Vec<SweepContact>,
+
+    /// Largest push of a linked finger into the object, m.
+    pub push: f64,
+}
+
+/// Bodies of each finger's chain that carry collision pieces, palm side first, with the piece
+/// indices of each.
+pub fn finger_links(
+    hand: &KinematicHand,
+    collision: &HandCollision,
+    finger: usize,
+) -> Vec<(usize, Vec<usize>)> {
+    hand.fingers[finger]
+        .bodies
+        .iter()
+        .filter_map(|&b| {
+            let pieces: Vec<usize> = (0..collision.pieces.len())
+                .filter(|&k| collision.pieces[k].body == b)
+                .collect();
+            (!pieces.is_empty()).then_some((b, pieces))
+        })
+        .collect()
+}
+
+/// What a sweep needs of the hand.
+pub struct SweepHand<'a> {
+    pub hand: &'a KinematicHand,
+    pub synergy: &'a HandSynergy,
+    pub collision: &'a HandCollision,
+    /// The model's root in the world (fixed while the fingers close).
+    pub root_in_world: Isometry3<f64>,
+}
+
+impl SweepHand<'_> {
+    fn posed(&self, q: &[f64]) -> Result<PosedCollision, FieldError> {
+        let fk = self.hand.tree.forward(q)?;
+        Ok(self.collision.posed_fk(&fk, &self.root_in_world))
+    }
+
+    /// Joints for per-finger, per-flexion-joint path parameters.
+    fn configure(&self, base: &[f64], s: &[(usize, Vec<f64>)]) -> Result<Vec<f64>, FieldError> {
+        let mut q = base.to_vec();
+        let mut constrained = false;
+        let mut held = Vec::new();
+        for (f, sv) in s {
+            let fs = &self.synergy.fingers[*f];
+            for (fj, &v) in fs.flexion.iter().zip(sv) {
+                q[fj.joint] = fj.open + v * (fj.closed - fj.open);
+                held.push(fj.joint);
+            }
+            constrained |= fs.constrained;
+        }
+        self.hand.tree.clamp(&mut q);
+        if constrained {
+            self.hand.tree.project_constraints_holding(&mut q, &held)?;
+        }
+        Ok(q)
+    }
+}
+
+/// Whether `link`'s pieces touch the object in `posed`.
+fn link_touches(posed: &PosedCollision, pieces: &[usize], object: &ObjectView) -> bool {
+    pieces.iter().any(|&k| {
+        let (c, r) = posed.sphere(k);
+        object.near(&c, r + TOUCH_MARGIN)
+            && posed.any_within(
+                k,
+                &object.points,
+                &object.index,
+                TOUCH_MARGIN,
+                &Vector3::zeros(),
+            )
+    })
+}
+
+/// Closes `fingers` (each starting at path parameter `s0`) from the joints `base` (setting
+/// joints of the pre-shape, other fingers in their posture). See the module documentation.
+pub fn close_fingers(
+    h: &SweepHand,
+    base: &[f64],
+    fingers: &[usize],
+    s0: f64,
+    object: &ObjectView,
+) -> Result<Closed, FieldError> {
+    let links: Vec<Vec<(usize, Vec<usize>)>> = fingers
+        .iter()
+        .map(|&f| finger_links(h.hand, h.collision, f))
+        .collect();
+    // Per finger: the flexion joints that move each link (palm side first, so link i is moved
+    // by the flexion joints on bodies up to and including it).
+    let movers: Vec<Vec<Vec<usize>>> = fingers
+        .iter()
+        .zip(&links)
+        .map(|(&f, ls)| {
+            let fs = &h.synergy.fingers[f];
+            ls.iter()
+                .map(|(b, _)| {
+                    (0..fs.flexion.len())
+                        .filter(|&k| h.hand.tree.joint_moves(fs.flexion[k].joint, *b))
+                        .collect()
+                })
+                .collect()
+        })
+        .collect();
+    let mut s: Vec<(usize, Vec<f64>)> = fingers
+        .iter()
+        .map(|&f| (f, vec![s0; h.synergy.fingers[f].flexion.len()]))
+        .collect();
+    let mut active: Vec<Vec<bool>> = s.iter().map(|(_, v)| vec![true; v.len()]).collect();
+    let mut stopped_links: Vec<Vec<bool>> = links.iter().map(|l| vec![false; l.len()]).collect();
+    // Linked fingers advance as one: a group is done when all its fingers touched.
+    let linked: Vec<bool> = fingers
+        .iter()
+        .map(|&f| h.synergy.fingers[f].constrained)
+        .collect();
+    let mut linked_touch: Vec<Option<f64>> = vec![None; fingers.len()];
+    let ds = 1.0 / STEPS as f64;
+    for _ in 0..(2 * STEPS) {
+        if active.iter().all(|a| a.iter().all(|x| !x)) {
+            break;
+        }
+        let advance = |s: &[(usize, Vec<f64>)], act: &[Vec<bool>], step: f64| {
+            s.iter()
+                .zip(act)
+                .map(|((f, v), a)| {
+                    (
+                        *f,
+                        v.iter()
+                            .zip(a)
+                            .map(|(x, on)| if *on { (x + step).min(1.0) } else { *x })
+                            .collect::<Vec<f64>>(),
+                    )
+                })
+                .collect::<Vec<_>>()
+        };
+        let next = advance(&s, &active, ds);
+        let q = h.configure(base, &next)?;
+        let posed = h.posed(&q)?;
+        // Which still-moving links touch now.
+        let mut hit = false;
+        for (i, ls) in links.iter().enumerate() {
+            for (l, (_, pieces)) in ls.iter().enumerate() {
+                if stopped_links[i][l] || !movers[i][l].iter().any(|&k| active[i][k]) {
+                    continue;
+                }
+                hit |= link_touches(&posed, pieces, object);
+            }
+        }
+        if !hit {
+            s = next;
+            // Joints that reached the closed limit stop.
+            for (i, (_, v)) in s.iter().enumerate() {
+                for (k, x) in v.iter().enumerate() {
+                    if *x >= 1.0 {
+                        active[i][k] = false;
+                    }
+                }
+            }
+            continue;
+        }
+        // Refine the first touch: the largest fraction of the step that touches nothing.
+        let (mut lo, mut hi) = (0.0, ds);
+        for _ in 0..BISECTIONS {
+            let mid = 0.5 * (lo + hi);
+            let q = h.configure(base, &advance(&s, &active, mid))?;
+            let posed = h.posed(&q)?;
+            let mut any = false;
+            for (i, ls) in links.iter().enumerate() {
+                for (l, (_, pieces)) in ls.iter().enumerate() {
+                    if stopped_links[i][l] || !movers[i][l].iter().any(|&k| active[i][k]) {
+                        continue;
+                    }
+                    any |= link_touches(&posed, pieces, object);
+                }
+            }
+            if any { hi = mid } else { lo = mid }
+        }
+        let touch = advance(&s, &active, hi);
+        let q = h.configure(base, &touch)?;
+        let posed = h.posed(&q)?;
+        s = advance(&s, &active, lo);
+        // Stop the joints moving each link that touches at `hi`.
+        for (i, ls) in links.iter().enumerate() {
+            for (l, (_, pieces)) in ls.iter().enumerate() {
+                if stopped_links[i][l] || !movers[i][l].iter().any(|&k| active[i][k]) {
+                    continue;
+                }
+                if !link_touches(&posed, pieces, object) {
+                    continue;
+                }
+                stopped_links[i][l] = true;
+                if linked[i] {
+                    linked_touch[i].get_or_insert(s[i].1.first().copied().unwrap_or(0.0));
+                    continue;
+                }
+                for &k in &movers[i][l] {
+                    active[i][k] = false;
+                }
+            }
+        }
+        // A linked group stops when all its fingers touched (or its joints are closed).
+        if linked.iter().any(|&x| x) {
+            let all = (0..fingers.len())
+                .filter(|&i| linked[i])
+                .all(|i| linked_touch[i].is_some());
+            if all {
+                for (i, a) in active.iter_mut().enumerate() {
+                    if linked[i] {
+                        a.iter_mut().for_each(|x| *x = false);
+                    }
+                }
+            }
+        }
+    }
+    let joints = h.configure(base, &s)?;
+    let posed = h.posed(&joints)?;
+    let mut contacts = Vec::new();
+    for (i, ls) in links.iter().enumerate() {
+        for (b, pieces) in ls {
+            if let Some(c) = patch(&posed, pieces, object, *b, Some(fingers[i])) {
+                contacts.push(c);
+            }
+        }
+    }
+    // How far the linked fingers that touched first were carried on into the object.
+    let mut push: f64 = 0.0;
+    for (i, t) in linked_touch.iter().enumerate() {
+        if t.is_some() {
+            for (_, pieces) in &links[i] {
+                for &k in pieces {
+                    for (_, d) in posed.touching(k, &object.points, &object.index, 0.0) {
+                        push = push.max(-d);
+                    }
+                }
+            }
+        }
+    }
+    Ok(Closed {
+        joints,
+        s,
+        contacts,
+        push,
+    })
+}
+
+/// The contact patch of `body`'s pieces: the object points within [`PATCH_MARGIN`], their mean
+/// position and normal, and the nearest point.
+pub fn patch(
+    posed: &PosedCollision,
+    pieces: &[usize],
+    object: &ObjectView,
+    body: usize,
+    finger: Option<usize>,
+) -> Option<SweepContact> {
+    let mut pts: Vec<(usize, f64)> = Vec::new();
+    for &k in pieces {
+        let (c, r) = posed.sphere(k);
+        if !object.near(&c, r + PATCH_MARGIN) {
+            continue;
+        }
+        for (i, d) in posed.touching(k, &object.points, &object.index, PATCH_MARGIN) {
+            match pts.iter_mut().find(|(j, _)| *j == i) {
+                Some(e) => e.1 = e.1.min(d),
+                None => pts.push((i, d)),
+            }
+        }
+    }
+    if pts.is_empty() {
+        return None;
+    }
+    pts.sort_by_key(|&(i, _)| i);
+    let n = pts.len() as f64;
+    let position = Point3::from(
+        pts.iter()
+            .map(|&(i, _)| object.points[i].coords)
+            .sum::<Vector3<f64>>()
+            / n,
+    );
+    let normal = pts
+        .iter()
+        .map(|&(i, _)| object.normals.get(object.source[i]))
+        .sum::<Vector3<f64>>()
+        .try_normalize(1e-9)?;
+    let point = pts
+        .iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|&(i, _)| object.source[i])?;
+    let gap = pieces
+        .iter()
+        .map(|&k| posed.signed_distance(k, &position).abs())
+        .fold(f64::INFINITY, f64::min);
+    Some(SweepContact {
+        finger,
+        body,
+        point,
+        position,
+        normal,
+        gap,
+    })
+}

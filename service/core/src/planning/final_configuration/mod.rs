@@ -1,0 +1,829 @@
+//! The final configuration g = (C_g, Joint_g, Pose_g) of a hand with known kinematics, found
+//! with the hand's own model in the loop (issue 15). Stage 1 (the pregrasping opposition) is the
+//! front end; after it, for each candidate:
+//!
+//! 1. **Place** ([`placement`]): the pre-shape's grasp frame on the opposition, turned about it to
+//!    each approach to try, the pre-shaped hand moved in along the approach from the pre-grasp
+//!    distance until it would touch the object (the visible points and their mirror completion)
+//!    or the table — so proposals are clear of both by construction.
+//! 2. **Close** ([`closing_sweep`]): the taking-part fingers close along the synergy until their
+//!    links touch; fingers that take no part keep the posture (open, or curled) that let the
+//!    hand go deepest. The contacts are where the links touch; the grasp joints are the
+//!    touching joints.
+//! 3. **Squeeze**: each touching finger closed further so that its contacts move up to
+//!    `squeeze_depth` into the object along their normals, none outward and no joint opening
+//!    (a small linear program per finger; linked groups by one path step) — the position
+//!    servos' error becomes the grip force; the pre-grasp joints are the pre-shape.
+//! 4. **Judge**: feasible when both sides touch, S ≥ ε (Eq 5.3, GII about the contacts), the
+//!    grasp and the squeeze are clear of the table and linked fingers push the object at most
+//!    [`MAX_PUSH`]; ranked by the force at the estimated centre of mass the contacts resist in
+//!    their weakest direction ([`super::robustness`]), then by Q of Eq 5.2.
+//!
+//! Candidates: up to four stage-1 oppositions × the approach preferences (−n_att, the rule's
+//! approach, −up, −z; each made perpendicular to the opposition) × turns of 0, ±30° and ±60°
+//! about the opposition line, in that order of preference; at most
+//! `options.final_candidates` are judged. Deterministic: no clock decides anything.
+
+pub mod closing_sweep;
+pub mod placement;
+
+use super::kinematic_model::KinematicModel;
+use super::quality::{self, ContactPoint};
+use super::robustness::{Robustness, robustness};
+use super::search_context::{PLANE_TOLERANCE, SearchContext};
+use crate::cloud::{CloudIndex, LazyNormals, Plane};
+use crate::error::FieldError;
+use crate::grasp_type::GraspType;
+use crate::hand::kinematics::PreShape;
+use closing_sweep::{Closed, SweepContact, SweepHand, close_fingers, patch};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+
+/// Largest push of a linked finger into the object while its group closes, m.
+pub const MAX_PUSH: f64 = 0.015;
+/// Openings beyond the opposition's width that fingertip pre-shapes try, m (then fully open).
+pub const PRESHAPE_MARGINS: [f64; 3] = [0.03, 0.06, 0.1];
+/// Times the hand is raised when the closed fingers reach into the table.
+const MAX_RAISES: usize = 2;
+/// How far each finger's contacts may stand off the object in the pre-grasp opening, m,
+/// tightest first.
+pub const PREGRASP_TRAVELS: [f64; 4] = [0.025, 0.04, 0.06, 0.09];
+/// Turns about the opposition line tried for each approach, degrees.
+const TURNS_DEG: [f64; 5] = [0.0, 30.0, -30.0, 60.0, -60.0];
+/// Approaches closer than this (cosine) count as one.
+const SAME_APPROACH_COS: f64 = 0.97;
+
+/// Cell of the grid the object's points are thinned to for collision queries, m: well below a
+/// finger's thickness, so no link passes between two points.
+pub const COLLISION_CELL: f64 = 0.004;
+
+/// The object as the search sees it: its points thinned to one per [`COLLISION_CELL`] for the
+/// collision queries, with the planner's normals.
+pub struct ObjectView<'a> {
+    pub points: Vec<Point3<f64>>,
+    pub index: CloudIndex,
+    /// For each thinned point, its index in the planner's cloud.
+    pub source: Vec<usize>,
+    pub normals: &'a LazyNormals<'a>,
+    pub plane: Option<&'a Plane>,
+    /// Bounds of the points.
+    lo: Point3<f64>,
+    hi: Point3<f64>,
+}
+
+impl<'a> ObjectView<'a> {
+    pub fn new(
+        cloud: &[Point3<f64>],
+        normals: &'a LazyNormals<'a>,
+        plane: Option<&'a Plane>,
+    ) -> Self {
+        let all: Vec<usize> = (0..cloud.len()).collect();
+        let source = super::slot_set::voxel_subset(cloud, &all, COLLISION_CELL);
+        let points: Vec<Point3<f64>> = source.iter().map(|&i| cloud[i]).collect();
+        let mut lo = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        let mut hi = -lo;
+        for p in &points {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        Self {
+            index: CloudIndex::new(&points),
+            points,
+            source,
+            normals,
+            plane,
+            lo,
+            hi,
+        }
+    }
+
+    /// Whether `p` lies below the object's top (along `up`) by at least `fraction` of its height.
+    pub fn below_top(&self, p: &Point3<f64>, up: &Vector3<f64>, fraction: f64) -> bool {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for q in &self.points {
+            let h = q.coords.dot(up);
+            lo = lo.min(h);
+            hi = hi.max(h);
+        }
+        p.coords.dot(up) <= hi - fraction * (hi - lo)
+    }
+
+    /// The object's extent along unit `dir`, m.
+    pub fn extent_along(&self, dir: &Vector3<f64>) -> f64 {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for q in &self.points {
+            let h = q.coords.dot(dir);
+            lo = lo.min(h);
+            hi = hi.max(h);
+        }
+        (hi - lo).max(0.0)
+    }
+
+    /// Whether a sphere may reach the points (overlaps their bounding box).
+    pub fn near(&self, c: &Point3<f64>, r: f64) -> bool {
+        (0..3).all(|k| c[k] + r >= self.lo[k] && c[k] - r <= self.hi[k])
+    }
+}
+
+/// One judged candidate.
+#[derive(Debug, Clone)]
+pub struct FinalConfiguration {
+    /// The stage-1 opposition it was built on (point indices).
+    pub opposition: (usize, usize),
+    /// Unit approach direction in the world (the hand moves along it from the pre-grasp).
+    pub approach: Vector3<f64>,
+    /// The hand frame at the grasp, in the world.
+    pub hand_pose: Isometry3<f64>,
+    /// The model's root frame at the grasp.
+    pub root_pose: Isometry3<f64>,
+    /// Joints of the pre-grasp (the pre-shape), the grasp (touching) and the squeeze.
+    pub pregrasp: Vec<f64>,
+    pub grasp: Vec<f64>,
+    pub squeeze: Vec<f64>,
+    pub contacts: Vec<SweepContact>,
+    /// S of Eq 5.3 over the contacts.
+    pub gii: f64,
+    pub robustness: Robustness,
+    /// Least clearance of the hand to the table at the grasp, the squeeze and the pre-grasp, m.
+    pub plane_clearance: Option<f64>,
+    pub push: f64,
+    pub feasible: bool,
+    pub reason: Option<String>,
+    /// Ranking key within feasibility (larger is better).
+    pub score: f64,
+}
+
+/// The candidates of one request: which fingers take part and how the hand is pre-shaped.
+struct Grasp<'m> {
+    pre: &'m PreShape,
+    wrap: bool,
+    /// Kinematic fingers taking part, h1 then h2.
+    taking_part: Vec<usize>,
+    free: Vec<usize>,
+}
+
+/// Searches the final configurations on `oppositions` (best first) and returns up to `want`
+/// distinct ones, feasible first, best first; empty when the hand has no pre-shape for the
+/// grasp.
+pub fn search(
+    ctx: &SearchContext,
+    model: &KinematicModel,
+    oppositions: &[(usize, usize)],
+    want: usize,
+) -> Result<Vec<FinalConfiguration>, FieldError> {
+    let kin = |desc: &[usize]| -> Vec<usize> {
+        desc.iter()
+            .filter_map(|&i| model.hand.finger_index(&ctx.hand.fingers[i].name))
+            .collect()
+    };
+    let h1 = kin(&ctx.grasp.h1_fingers);
+    let h2 = kin(&ctx.grasp.h2_fingers);
+    let Some(pre) = model.pre_shape(&h1, &h2) else {
+        return Ok(Vec::new());
+    };
+    let taking_part: Vec<usize> = h1.iter().chain(&h2).copied().collect();
+    let grasp = Grasp {
+        pre,
+        wrap: matches!(
+            ctx.grasp.grasp_type,
+            GraspType::LargeWrap | GraspType::SmallWrap | GraspType::Power
+        ),
+        free: (0..model.hand.fingers.len())
+            .filter(|f| !taking_part.contains(f))
+            .collect(),
+        taking_part,
+    };
+    let object = ObjectView::new(ctx.points, ctx.normals, ctx.plane.as_ref());
+    let mut order: Vec<(f64, usize, Vector3<f64>)> = Vec::new();
+    for (rank, &(a, b)) in oppositions.iter().take(4).enumerate() {
+        let line = match (ctx.points[b] - ctx.points[a]).try_normalize(1e-9) {
+            Some(l) => l,
+            None => continue,
+        };
+        let mut seen: Vec<Vector3<f64>> = Vec::new();
+        for (pref_rank, pref) in ctx.approach_prefs.iter().enumerate() {
+            let Some(base) = (pref - line * pref.dot(&line)).try_normalize(0.2) else {
+                continue;
+            };
+            for (turn_rank, deg) in TURNS_DEG.iter().enumerate() {
+                let r = UnitQuaternion::from_axis_angle(
+                    &nalgebra::Unit::new_normalize(line),
+                    deg.to_radians(),
+                );
+                let a_dir = r * base;
+                if seen.iter().any(|s| s.dot(&a_dir) > SAME_APPROACH_COS) {
+                    continue;
+                }
+                seen.push(a_dir);
+                let prior = rank as f64 + 0.6 * pref_rank as f64 + 0.8 * turn_rank as f64;
+                order.push((prior, rank, a_dir));
+            }
+        }
+    }
+    order.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut judged: Vec<FinalConfiguration> = Vec::new();
+    for (_, rank, approach) in order.iter().take(ctx.options.final_candidates) {
+        let (a, b) = oppositions[*rank];
+        if let Some(c) = judge(ctx, model, &grasp, &object, (a, b), approach)? {
+            judged.push(c);
+        }
+        let good = judged
+            .iter()
+            .filter(|c| c.feasible && c.robustness.weakest >= GOOD_ENOUGH)
+            .count();
+        if good >= want {
+            break;
+        }
+    }
+    judged.sort_by(|x, y| {
+        y.feasible
+            .cmp(&x.feasible)
+            .then(y.score.total_cmp(&x.score))
+    });
+    let mut out: Vec<FinalConfiguration> = Vec::new();
+    for c in judged {
+        let distinct = out.iter().all(|o| {
+            (o.hand_pose.translation.vector - c.hand_pose.translation.vector).norm() > 0.01
+                || o.hand_pose.rotation.angle_to(&c.hand_pose.rotation) > 15f64.to_radians()
+        });
+        if distinct {
+            out.push(c);
+        }
+        if out.len() == want {
+            break;
+        }
+    }
+    Ok(out)
+}
+
+/// A candidate this robust (resisted force per unit grip force, weakest direction) ends the
+/// search early once enough of them are found.
+const GOOD_ENOUGH: f64 = 1.0;
+
+/// Places, closes, squeezes and judges one candidate; None when the hand cannot even start
+/// (it collides at the pre-grasp for every free-finger posture) or the frames degenerate.
+fn judge(
+    ctx: &SearchContext,
+    model: &KinematicModel,
+    grasp: &Grasp,
+    object: &ObjectView,
+    opposition: (usize, usize),
+    approach: &Vector3<f64>,
+) -> Result<Option<FinalConfiguration>, FieldError> {
+    // Wrap grasps come in open; fingertip grasps open PRESHAPE_MARGINS wider than the
+    // opposition, tightest first (beside a low object the fingertips must come down steeply
+    // enough to meet its side), until one closes on the object feasibly.
+    let width = (ctx.points[opposition.1] - ctx.points[opposition.0]).norm();
+    let mut openings: Vec<f64> = if grasp.wrap {
+        vec![0.0]
+    } else {
+        PRESHAPE_MARGINS
+            .iter()
+            .map(|m| grasp.pre.s_for_opening(width + m).min(0.8))
+            .chain(std::iter::once(0.0))
+            .collect()
+    };
+    openings.dedup_by(|a, b| (*a - *b).abs() < 0.03);
+    let mut best: Option<FinalConfiguration> = None;
+    for s0 in openings {
+        let Some(c) = judge_with(ctx, model, grasp, object, opposition, approach, s0)? else {
+            continue;
+        };
+        let rank = |c: &FinalConfiguration| (c.feasible, c.contacts.len().min(3), c.score);
+        if best
+            .as_ref()
+            .is_none_or(|b| rank(&c).partial_cmp(&rank(b)) == Some(std::cmp::Ordering::Greater))
+        {
+            let done = c.feasible;
+            best = Some(c);
+            if done {
+                break;
+            }
+        }
+    }
+    Ok(best)
+}
+
+/// [`judge`] with the taking-part fingers pre-shaped at path parameter `s0`.
+fn judge_with(
+    ctx: &SearchContext,
+    model: &KinematicModel,
+    grasp: &Grasp,
+    object: &ObjectView,
+    (oc1, oc2): (usize, usize),
+    approach: &Vector3<f64>,
+    s0: f64,
+) -> Result<Option<FinalConfiguration>, FieldError> {
+    let hand = &model.hand;
+    let syn = &model.synergy;
+    let pre = grasp.pre;
+    let (p1, p2) = (ctx.points[oc1], ctx.points[oc2]);
+    let Some(target) = placement::target_frame(
+        pre,
+        &p1,
+        &p2,
+        approach,
+        &ctx.shape.axes[0],
+        &ctx.shape.center,
+        |x| object.extent_along(x),
+    ) else {
+        return Ok(None);
+    };
+    let mut aligned = placement::hand_pose_for(pre, &target);
+    let a = target.rotation * Vector3::z();
+    let depth = placement::family_depth(pre, grasp.wrap);
+    // The pre-shape with the free fingers open or curled: the one that goes in deepest.
+    let mut best: Option<(f64, Vec<f64>, Isometry3<f64>)> = None;
+    for curl in [0.0, 1.0] {
+        if curl > 0.0 && grasp.free.is_empty() {
+            break;
+        }
+        let mut q = pre.base.clone();
+        let mut fs: Vec<(usize, f64)> = grasp.taking_part.iter().map(|&f| (f, s0)).collect();
+        fs.extend(grasp.free.iter().map(|&f| (f, curl)));
+        syn.close(hand, &mut q, &fs)?;
+        // From the side, a grasp low on the object puts the palm or the arm into the table:
+        // raise it, as long as the grasp centre stays below the object's top less a quarter
+        // of its height. (From above the table lies ahead: the move in stops at it.)
+        let from_above = object.plane.is_some_and(|p| a.dot(&p.normal) < -0.5);
+        let rise = if from_above {
+            0.0
+        } else {
+            placement::rise_above_table(
+                model,
+                &q,
+                &aligned,
+                &a,
+                ctx.options.pregrasp_distance,
+                object,
+            )?
+        };
+        let mut pose = aligned;
+        if rise > 0.0 {
+            let Some(up) = object.plane.map(|p| p.normal) else {
+                continue;
+            };
+            let centre = target.translation.vector + up * rise;
+            if !object.below_top(&Point3::from(centre), &up, 0.25) {
+                continue;
+            }
+            pose = Isometry3::from_parts(Translation3::from(up * rise), UnitQuaternion::identity())
+                * aligned;
+        }
+        if let Some(t) = placement::move_in(
+            model,
+            &q,
+            &pose,
+            &a,
+            ctx.options.pregrasp_distance,
+            depth,
+            object,
+        )? && best.as_ref().is_none_or(|(bt, _, _)| t > *bt + 1e-4)
+        {
+            best = Some((t, q, pose));
+        }
+    }
+    let Some((t, q_pre, placed)) = best else {
+        tracing::debug!(
+            ?approach,
+            "candidate: the pre-shaped hand collides at the pre-grasp, or would have to rise \
+             above the object's top to clear the table"
+        );
+        return Ok(None);
+    };
+    aligned = placed;
+    let mut hand_pose =
+        Isometry3::from_parts(Translation3::from(a * t), UnitQuaternion::identity()) * aligned;
+    let fk = hand.tree.forward(&q_pre)?;
+    let to_root = (fk.body_poses[hand.palm] * hand.hand_frame()).inverse();
+    // Fingertips that close along the table (beside a low object) end up below it: raise the
+    // hand by what they reach into it, while it stays clear, and close again.
+    let up = object.plane.map(|p| p.normal);
+    let mut raised = 0;
+    let (root, sweep, closed) = loop {
+        let root = hand_pose * to_root;
+        let sweep = SweepHand {
+            hand,
+            synergy: syn,
+            collision: &model.collision,
+            root_in_world: root,
+        };
+        let closed = close_fingers(&sweep, &q_pre, &grasp.taking_part, s0, object)?;
+        let below = match object.plane {
+            Some(pl) => {
+                let fk = hand.tree.forward(&closed.joints)?;
+                -model.collision.posed_fk(&fk, &root).plane_clearance(pl)
+            }
+            None => 0.0,
+        };
+        let Some(up) = up.filter(|_| below > PLANE_TOLERANCE && raised < MAX_RAISES) else {
+            break (root, sweep, closed);
+        };
+        let next = Isometry3::from_parts(
+            Translation3::from(up * (below + placement::CLEARANCE)),
+            UnitQuaternion::identity(),
+        ) * hand_pose;
+        let fk = hand.tree.forward(&q_pre)?;
+        let posed = model.collision.posed_fk(&fk, &(next * to_root));
+        if !placement::clear_at(&posed, &Vector3::zeros(), object, placement::CLEARANCE) {
+            break (root, sweep, closed);
+        }
+        hand_pose = next;
+        raised += 1;
+    };
+    let mut contacts = closed.contacts.clone();
+    contacts.extend(palm_contacts(model, &sweep, &closed.joints, object)?);
+    let squeeze = squeeze_joints(model, &sweep, &closed, &contacts, ctx.options.squeeze_depth)?;
+    // The pre-grasp opening: every finger backed off its touch by the same travel, so that
+    // all arrive together — the tightest of PREGRASP_TRAVELS with which the hand so shaped
+    // still comes in clear (else the pre-shape it came in with).
+    let mut q_pre = q_pre;
+    for travel in PREGRASP_TRAVELS {
+        let mut opening = advance_contacts(model, &sweep, &closed, &contacts, -travel, s0)?;
+        for (_, sv) in &mut opening {
+            sv.iter_mut().for_each(|x| *x = x.max(s0));
+        }
+        let q_open = joints_at(model, &closed, &opening)?;
+        if let Some(t2) = placement::move_in(
+            model,
+            &q_open,
+            &hand_pose,
+            &a,
+            ctx.options.pregrasp_distance,
+            0.0,
+            object,
+        )? && t2 >= -1e-9
+        {
+            q_pre = q_open;
+            break;
+        }
+    }
+    // The table at the grasp and the squeeze (the pre-grasp and the way in were kept clear).
+    let plane_clearance = match object.plane {
+        Some(pl) => {
+            let mut c = f64::INFINITY;
+            for q in [&closed.joints, &squeeze] {
+                let fk = hand.tree.forward(q)?;
+                c = c.min(model.collision.posed_fk(&fk, &root).plane_clearance(pl));
+            }
+            Some(c)
+        }
+        None => None,
+    };
+    let cps: Vec<ContactPoint> = contacts
+        .iter()
+        .map(|c| ContactPoint {
+            position: c.position,
+            normal: c.normal,
+        })
+        .collect();
+    let gii = if cps.len() >= 2 {
+        quality::gii(&cps, ctx.options.torsion_gamma)
+    } else {
+        0.0
+    };
+    let up = ctx.plane.map(|p| p.normal);
+    let rob = robustness(
+        &cps,
+        &ctx.shape.center,
+        ctx.shape.radius,
+        ctx.options.friction,
+        0.01,
+        up.as_ref(),
+    );
+    let h1_side = contacts.iter().any(|c| match c.finger {
+        Some(f) => pre.h1.contains(&f),
+        None => true,
+    });
+    let h2_side = contacts
+        .iter()
+        .any(|c| c.finger.is_some_and(|f| pre.h2.contains(&f)));
+    let reason = if !(h1_side && h2_side) {
+        Some(format!(
+            "closing the fingers at the planned pose touches {} side of the object",
+            if h1_side || h2_side {
+                "only one"
+            } else {
+                "neither"
+            }
+        ))
+    } else if gii < ctx.options.epsilon {
+        Some(format!(
+            "final configuration: S = {gii:.3} < ε = {}",
+            ctx.options.epsilon
+        ))
+    } else if plane_clearance.is_some_and(|c| c < -PLANE_TOLERANCE) {
+        Some(format!(
+            "the closed hand reaches {:.1} mm into the support plane",
+            -plane_clearance.unwrap_or(0.0) * 1e3
+        ))
+    } else if closed.push > MAX_PUSH {
+        Some(format!(
+            "the linked fingers would push the object {:.0} mm before both touch",
+            closed.push * 1e3
+        ))
+    } else {
+        None
+    };
+    let assessment = ctx.assess(&[oc1], &[oc2], ctx.options.stage2_weights);
+    let score = rob.weakest + 0.1 * assessment.q.max(-1.0) - 2.0 * closed.push;
+    tracing::debug!(
+        approach = ?[a.x, a.y, a.z],
+        t,
+        contacts = contacts.len(),
+        fingers = ?contacts.iter().map(|c| c.finger).collect::<Vec<_>>(),
+        gii,
+        robustness = rob.weakest,
+        gravity = rob.gravity,
+        reason = reason.as_deref().unwrap_or("feasible"),
+        "candidate"
+    );
+    Ok(Some(FinalConfiguration {
+        opposition: (oc1, oc2),
+        approach: a,
+        hand_pose,
+        root_pose: root,
+        pregrasp: q_pre,
+        grasp: closed.joints,
+        squeeze,
+        contacts,
+        gii,
+        robustness: rob,
+        plane_clearance,
+        push: closed.push,
+        feasible: reason.is_none(),
+        reason,
+        score,
+    }))
+}
+
+/// Contacts of the bodies that belong to no finger (the palm, the hand's base) at `q`.
+fn palm_contacts(
+    model: &KinematicModel,
+    sweep: &SweepHand,
+    q: &[f64],
+    object: &ObjectView,
+) -> Result<Vec<SweepContact>, FieldError> {
+    let hand = &model.hand;
+    let fk = hand.tree.forward(q)?;
+    let posed = model.collision.posed_fk(&fk, &sweep.root_in_world);
+    let in_finger = |b: usize| hand.fingers.iter().any(|f| f.bodies.contains(&b));
+    let mut bodies: Vec<usize> = model
+        .collision
+        .pieces
+        .iter()
+        .map(|p| p.body)
+        .filter(|&b| !in_finger(b))
+        .collect();
+    bodies.dedup();
+    let mut out = Vec::new();
+    for b in bodies {
+        let pieces: Vec<usize> = (0..model.collision.pieces.len())
+            .filter(|&k| model.collision.pieces[k].body == b)
+            .collect();
+        if let Some(c) = patch(&posed, &pieces, object, b, None) {
+            out.push(c);
+        }
+    }
+    Ok(out)
+}
+
+/// Per taking-part finger, its path parameters advanced from the touch so that its contacts move
+/// `travel` along their inward normals (negative: back out); `untouched` for a finger that
+/// touches nothing. Linear in s from the touch (the speed measured over a small step).
+fn advance_contacts(
+    model: &KinematicModel,
+    sweep: &SweepHand,
+    closed: &Closed,
+    contacts: &[SweepContact],
+    travel: f64,
+    untouched: f64,
+) -> Result<Vec<(usize, Vec<f64>)>, FieldError> {
+    let hand = &model.hand;
+    let syn = &model.synergy;
+    let fk0 = hand.tree.forward(&closed.joints)?;
+    let to_root = sweep.root_in_world.inverse();
+    let mut out: Vec<(usize, Vec<f64>)> = Vec::new();
+    const DS: f64 = 0.02;
+    for (f, sv) in &closed.s {
+        let mine: Vec<&SweepContact> = contacts.iter().filter(|c| c.finger == Some(*f)).collect();
+        if mine.is_empty() {
+            out.push((*f, vec![untouched; sv.len()]));
+            continue;
+        }
+        let mut q = closed.joints.clone();
+        for (fj, &v) in syn.fingers[*f].flexion.iter().zip(sv) {
+            q[fj.joint] = fj.open + (v + DS) * (fj.closed - fj.open);
+        }
+        let fk1 = hand.tree.forward(&q)?;
+        let mut speed: f64 = 0.0;
+        for c in mine {
+            let at = to_root * c.position;
+            let local = fk0.body_poses[c.body].inverse() * at;
+            let moved = fk1.body_poses[c.body] * local;
+            let inward = -(to_root.rotation * c.normal);
+            speed = speed.max((moved - at).dot(&inward) / DS);
+        }
+        let ds = if speed > 1e-4 {
+            (travel / speed).clamp(-0.6, 0.6)
+        } else {
+            0.2 * travel.signum()
+        };
+        out.push((*f, sv.iter().map(|x| (x + ds).clamp(0.0, 1.0)).collect()));
+    }
+    Ok(out)
+}
+
+/// The squeeze (module step 3): per touching finger, the flexion steps that press its contacts,
+/// carried with their links, up to `depth` along their inward normals and none outward (a
+/// linear program on the finite-difference Jacobian, re-linearised); each group of linked
+/// fingers takes one path step sized by least squares on its contacts. Taking-part fingers
+/// that touch nothing close fully. Joints stay inside their limits.
+fn squeeze_joints(
+    model: &KinematicModel,
+    sweep: &SweepHand,
+    closed: &Closed,
+    contacts: &[SweepContact],
+    depth: f64,
+) -> Result<Vec<f64>, FieldError> {
+    use microlp::{ComparisonOp, OptimizationDirection, Problem};
+    let hand = &model.hand;
+    let syn = &model.synergy;
+    let to_root = sweep.root_in_world.inverse();
+    let fk0 = hand.tree.forward(&closed.joints)?;
+    // Per contact: its point in its link's frame and its inward normal (root frame).
+    let carried = |c: &SweepContact| {
+        let at = to_root * c.position;
+        (
+            c.body,
+            fk0.body_poses[c.body].inverse() * at,
+            at,
+            -(to_root.rotation * c.normal),
+        )
+    };
+    let mut q = closed.joints.clone();
+    let mut linked: Vec<usize> = Vec::new();
+    const H: f64 = 1e-3;
+    for (f, _) in &closed.s {
+        let fs = &syn.fingers[*f];
+        let mine: Vec<_> = contacts
+            .iter()
+            .filter(|c| c.finger == Some(*f))
+            .map(carried)
+            .collect();
+        if mine.is_empty() {
+            for fj in &fs.flexion {
+                q[fj.joint] = fj.closed;
+            }
+            continue;
+        }
+        if fs.constrained {
+            linked.push(*f);
+            continue;
+        }
+        // Each contact's motion along its inward normal (sliding does not press) is linear in
+        // the finger's flexion steps (finite differences); a small linear program takes the
+        // steps that press most, each contact at most to `depth` and none outward, every joint
+        // only closing and inside its limits — re-linearised a few times for the rotations.
+        for _ in 0..3 {
+            let fk = hand.tree.forward(&q)?;
+            let left: Vec<f64> = mine
+                .iter()
+                .map(|(b, local, at, inward)| depth - (fk.body_poses[*b] * local - at).dot(inward))
+                .collect();
+            if left.iter().all(|&r| r < 2e-4) {
+                break;
+            }
+            let mut lp = Problem::new(OptimizationDirection::Maximize);
+            let mut rows: Vec<Vec<(microlp::Variable, f64)>> = vec![Vec::new(); mine.len()];
+            let mut steps = Vec::new();
+            for fj in &fs.flexion {
+                let dir = (fj.closed - fj.open).signum();
+                let (lo, hi) = hand.tree.joints[fj.joint].limits();
+                let room = if dir > 0.0 {
+                    hi - q[fj.joint]
+                } else {
+                    q[fj.joint] - lo
+                }
+                .max(0.0);
+                let mut qh = q.clone();
+                qh[fj.joint] += dir * H;
+                let fk1 = hand.tree.forward(&qh)?;
+                let along: Vec<f64> = mine
+                    .iter()
+                    .map(|(b, local, _, inward)| {
+                        (fk1.body_poses[*b] * local - fk.body_poses[*b] * local).dot(inward) / H
+                    })
+                    .collect();
+                // Objective: the summed press, less a little motion.
+                let gain: f64 = along.iter().sum::<f64>() - 1e-4;
+                let x = lp.add_var(gain, (0.0, room));
+                for (row, a) in rows.iter_mut().zip(&along) {
+                    row.push((x, *a));
+                }
+                steps.push((fj.joint, dir, x));
+            }
+            for (row, r) in rows.iter().zip(&left) {
+                lp.add_constraint(row.as_slice(), ComparisonOp::Le, r.max(0.0));
+                lp.add_constraint(row.as_slice(), ComparisonOp::Ge, r.min(0.0));
+            }
+            let Ok(Ok(sol)) = lp.solve().map(|o| o.into_solution()) else {
+                break;
+            };
+            for (joint, dir, x) in steps {
+                q[joint] += dir * sol[x];
+            }
+        }
+    }
+    hand.tree.clamp(&mut q);
+    // A linkage: one path parameter per group of linked fingers (a gripper's two jaws, or one
+    // finger whose distal joints are coupled), sized by least squares on the group's contacts'
+    // inward motion.
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for &f in &linked {
+        let g: Vec<usize> = syn
+            .group_of(f)
+            .iter()
+            .copied()
+            .filter(|g| linked.contains(g))
+            .collect();
+        if !groups.contains(&g) {
+            groups.push(g);
+        }
+    }
+    let s_of = |f: usize| {
+        closed
+            .s
+            .iter()
+            .find(|(g, _)| *g == f)
+            .map(|(_, v)| v.clone())
+    };
+    for group in &groups {
+        let mine: Vec<_> = contacts
+            .iter()
+            .filter(|c| c.finger.is_some_and(|f| group.contains(&f)))
+            .map(carried)
+            .collect();
+        let advanced = |q: &[f64], ds: f64| -> Result<Vec<f64>, FieldError> {
+            let s: Vec<(usize, Vec<f64>)> = group
+                .iter()
+                .filter_map(|&f| s_of(f).map(|v| (f, v.iter().map(|x| x + ds).collect())))
+                .collect();
+            let mut base = q.to_vec();
+            for (f, sv) in &s {
+                for (fj, &v) in syn.fingers[*f].flexion.iter().zip(sv) {
+                    base[fj.joint] = fj.open + v * (fj.closed - fj.open);
+                }
+            }
+            hand.tree.clamp(&mut base);
+            let held: Vec<usize> = s
+                .iter()
+                .flat_map(|(f, _)| syn.fingers[*f].flexion.iter().map(|fj| fj.joint))
+                .collect();
+            hand.tree.project_constraints_holding(&mut base, &held)?;
+            Ok(base)
+        };
+        let qh = advanced(&q, 0.01)?;
+        let fk1 = hand.tree.forward(&qh)?;
+        let (mut num, mut den) = (0.0, 0.0);
+        // Least squares on the motion along each inward normal (sliding does not press):
+        // ds·(v·n) = depth for every contact.
+        for (b, local, at, inward) in &mine {
+            let along = ((fk1.body_poses[*b] * local) - at).dot(inward) / 0.01;
+            num += along * depth;
+            den += along * along;
+        }
+        let ds = if den > 1e-12 {
+            (num / den).clamp(0.0, 0.6)
+        } else {
+            0.2
+        };
+        q = advanced(&q, ds)?;
+    }
+    Ok(q)
+}
+
+/// `closed.joints` with the taking-part fingers at path parameters `s` (projected onto the
+/// model's constraints when linked).
+fn joints_at(
+    model: &KinematicModel,
+    closed: &Closed,
+    s: &[(usize, Vec<f64>)],
+) -> Result<Vec<f64>, FieldError> {
+    let hand = &model.hand;
+    let syn = &model.synergy;
+    let mut q = closed.joints.clone();
+    for (f, sv) in s {
+        for (fj, &v) in syn.fingers[*f].flexion.iter().zip(sv) {
+            q[fj.joint] = fj.open + v * (fj.closed - fj.open);
+        }
+    }
+    hand.tree.clamp(&mut q);
+    if s.iter().any(|(f, _)| syn.fingers[*f].constrained) {
+        let held: Vec<usize> = s
+            .iter()
+            .flat_map(|(f, _)| syn.fingers[*f].flexion.iter().map(|fj| fj.joint))
+            .collect();
+        hand.tree.project_constraints_holding(&mut q, &held)?;
+    }
+    Ok(q)
+}
