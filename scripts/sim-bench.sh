@@ -10,7 +10,8 @@ log="$(mktemp)"
 "$root/target/release/graspd" --grpc-addr 127.0.0.1:0 --rest-addr 127.0.0.1:0 \
     --import-hand robotiq_2f85="$hands/robotiq_2f85/2f85.xml" \
     --import-hand barrett_mjcf="$hands/barrett/wam_barrett_gripper.xml" \
-    --import-hand shadow_mjcf="$hands/shadow_hand/right_hand.xml" >"$log" 2>&1 &
+    --import-hand shadow_mjcf="$hands/shadow_hand/right_hand.xml" \
+    --import-hand allegro="$hands/wonik_allegro/right_hand.xml" >"$log" 2>&1 &
 pid=$!
 trap 'kill $pid 2>/dev/null; rm -f "$log"' EXIT
 for _ in $(seq 100); do

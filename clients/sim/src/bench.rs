@@ -67,7 +67,7 @@ pub fn run_bench(config: &BenchConfig, service: &Service) -> Result<BenchReport,
     let hands: Vec<SimHand> = config
         .hands
         .iter()
-        .map(|h| SimHand::load(h))
+        .map(|h| SimHand::load(h, &config.hands_dir))
         .collect::<Result<_, _>>()?;
     let objects: Vec<SimObject> = config
         .objects
@@ -75,7 +75,7 @@ pub fn run_bench(config: &BenchConfig, service: &Service) -> Result<BenchReport,
         .map(|o| SimObject::load(&config.objects_dir, o))
         .collect::<Result<_, _>>()?;
     for h in &hands {
-        if service.ensure_hand(h, &config.hands_dir)? {
+        if service.ensure_hand(h)? {
             tracing::info!(hand = %h.graspd_hand, "registered with graspd");
         }
     }
@@ -106,11 +106,7 @@ pub fn run_bench(config: &BenchConfig, service: &Service) -> Result<BenchReport,
                     };
                     let Some(&(h, o)) = cells.get(k) else { break };
                     let (hand, obj) = (&hands[h], &objects[o]);
-                    let scene = match Scene::build(
-                        hand,
-                        &config.hands_dir,
-                        &[(obj, on_table(0.0, 0.0, 0.0))],
-                    ) {
+                    let scene = match Scene::build(hand, &[(obj, on_table(0.0, 0.0, 0.0))]) {
                         Ok(s) => s,
                         Err(e) => {
                             errors.lock().expect("errors").push(e);

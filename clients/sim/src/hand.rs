@@ -1,19 +1,45 @@
 //! How graspd-sim drives a hand model: which model file, which body to mount, which graspd hand
-//! plans for it, and each closing actuator's open and closed command (`clients/sim/hands/*.toml`).
+//! plans for it, its closing actuators and the squeeze depth it asks graspd for.
+//!
+//! Everything is derived from the MJCF model (issue 15), so any hand graspd can register can be
+//! simulated; a hand TOML (`clients/sim/hands/*.toml`, or a file given by path) only overrides:
+//! - **mounted body**: the model's top body (the first child of its world body);
+//! - **closing actuators**: the actuators whose length changes between the hand open and closed
+//!   as graspd's synergy closes it (`graspd_core::hand::kinematics::HandSynergy`: flexion joints
+//!   from the open pose to their far limits, linkages projected), MuJoCo computing the lengths
+//!   through each actuator's own transmission (joint, tendon, gear); open and closed commands
+//!   are the position servos' commands at those lengths, within the control range;
+//! - **squeeze depth** (how far graspd's squeeze presses each contact into the object): when
+//!   every closing servo has a force limit, graspd's largest (5 cm): the servos then press at
+//!   their own force limits, as a robot's gripper closes "until force"; the saturating error
+//!   computed from gain and force range alone proved too small in MuJoCo, where linkages and
+//!   soft contacts give way (the 2F-85 held 65 % of the Table 5.2 trials at it, 85 % at 5 cm);
+//!   with an unlimited servo, [`UNLIMITED_SQUEEZE_DEPTH`];
+//! - **graspd name**: the model's name (`<mujoco model=…>`) made a graspd name.
 
 use crate::SimError;
+use graspd_core::hand::kinematics::{HandSynergy, KinematicHand};
+use mujoco_rs::prelude::*;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 /// The built-in simulation hands: (name, TOML).
-const BUILT_IN: [(&str, &str); 3] = [
+const BUILT_IN: [(&str, &str); 4] = [
     ("robotiq_2f85", include_str!("../hands/robotiq_2f85.toml")),
     ("barrett", include_str!("../hands/barrett.toml")),
     ("shadow", include_str!("../hands/shadow.toml")),
+    ("allegro", include_str!("../hands/allegro.toml")),
 ];
 
+/// The largest squeeze depth graspd accepts (`options.squeeze_depth`), m.
+pub const MAX_SQUEEZE_DEPTH: f64 = 0.05;
+
+/// The squeeze depth for a hand with a closing servo that has no force limit, m: nothing bounds
+/// its grip but the depth, so it presses as a grasp benchmark's squeeze does (DexGraspBench).
+pub const UNLIMITED_SQUEEZE_DEPTH: f64 = 0.01;
+
 /// One closing actuator and its command range.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ClosingActuator {
     pub name: String,
@@ -23,75 +49,249 @@ pub struct ClosingActuator {
     pub closed: f64,
 }
 
-/// A simulated hand (one TOML file).
+/// A hand TOML: every field but the model is an override of the derivation.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
+struct HandToml {
+    model: PathBuf,
+    graspd_hand: Option<String>,
+    label: Option<String>,
+    root_body: Option<String>,
+    squeeze_depth: Option<f64>,
+    #[serde(default)]
+    actuators: Vec<ClosingActuator>,
+    #[serde(default)]
+    tactile_bodies: Vec<String>,
+    pad_friction: Option<f64>,
+    servo_gain_scale: Option<f64>,
+}
+
+/// A simulated hand.
+#[derive(Debug, Clone)]
 pub struct SimHand {
+    /// Short name (`robotiq_2f85`, `barrett`, …, or the file's stem).
+    pub name: String,
     /// Name of the hand in graspd (registered from `model` when the server lacks it).
     pub graspd_hand: String,
     /// Name for tables.
     pub label: String,
-    /// MJCF file, relative to the hands folder.
+    /// MJCF file (relative paths are taken in the hands folder).
     pub model: PathBuf,
-    /// The body of the model that is mounted on the 6-DoF base (the model's top body: its pose
-    /// relative to the base is the model's own, so the base frame is the model's world frame,
-    /// which is graspd's `root_pose`).
+    /// The body of the model mounted on the 6-DoF base (the model's top body: the base frame is
+    /// then the model's world frame, graspd's `root_pose`).
     pub root_body: String,
-    /// Fraction of each closing actuator's open → closed span commanded past the planned joints.
-    pub squeeze: f64,
-    /// Fraction of each closing actuator's span the pre-shape opens from the planned joints
-    /// (1: fully open).
-    pub preshape: f64,
+    /// The closing actuators with their open and closed commands.
     pub actuators: Vec<ClosingActuator>,
-    /// Bodies that carry a simulated BioTac (the finger pads), for the tactile closed loop; the
-    /// session's fingers are named after them.
-    #[serde(default)]
+    /// How far graspd's squeeze presses each contact into the object, m.
+    pub squeeze_depth: f64,
+    /// Bodies that carry a simulated BioTac (the finger pads), for the tactile closed loop.
     pub tactile_bodies: Vec<String>,
-    /// Sliding friction of those pads (their geoms' own), for sizing the grip force.
-    #[serde(default)]
+    /// Sliding friction of those pads, for sizing the grip force.
     pub pad_friction: Option<f64>,
-    /// Short name (`robotiq_2f85`, `barrett`, `shadow`, or the TOML's stem).
-    #[serde(skip)]
-    pub name: String,
+    /// Factor on the position gain (and the matching stiffness bias) of every actuator of the
+    /// hand in the scene: the documented asset change DexGraspBench makes to the MuJoCo
+    /// Menagerie hands (kp 1 → 5), whose servos are otherwise too weak to hold 100 g. 1 keeps
+    /// the model as it is.
+    pub servo_gain_scale: f64,
 }
 
 impl SimHand {
-    /// A built-in hand by name, or a TOML file by path.
-    pub fn load(name_or_path: &str) -> Result<Self, SimError> {
-        let (name, text) = match BUILT_IN.iter().find(|(n, _)| *n == name_or_path) {
-            Some((n, t)) => (n.to_string(), t.to_string()),
+    /// A built-in hand by name, a hand TOML by path, or an MJCF model (`.xml`) by path, derived
+    /// (module rules); relative model paths resolve in `hands_dir`.
+    pub fn load(name_or_path: &str, hands_dir: &Path) -> Result<Self, SimError> {
+        let bad = |e: String| SimError::Input(format!("hands: {name_or_path}: {e}"));
+        let (name, toml) = match BUILT_IN.iter().find(|(n, _)| *n == name_or_path) {
+            Some((n, t)) => (
+                n.to_string(),
+                toml::from_str::<HandToml>(t).map_err(|e| bad(e.to_string()))?,
+            ),
             None => {
                 let p = Path::new(name_or_path);
-                let text = std::fs::read_to_string(p).map_err(|e| {
-                    SimError::Input(format!(
-                        "hands: `{name_or_path}` is neither a built-in hand ({}) nor a readable \
-                         file: {e}",
-                        Self::built_in_names().join(", ")
-                    ))
-                })?;
-                let stem = p.file_stem().and_then(|s| s.to_str()).unwrap_or("hand");
-                (stem.to_string(), text)
+                let stem = p
+                    .file_stem()
+                    .and_then(|s| s.to_str())
+                    .unwrap_or("hand")
+                    .to_string();
+                if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) {
+                    let model = std::path::absolute(p).map_err(|e| bad(e.to_string()))?;
+                    (
+                        stem,
+                        HandToml {
+                            model,
+                            graspd_hand: None,
+                            label: None,
+                            root_body: None,
+                            squeeze_depth: None,
+                            actuators: Vec::new(),
+                            tactile_bodies: Vec::new(),
+                            pad_friction: None,
+                            servo_gain_scale: None,
+                        },
+                    )
+                } else {
+                    let text = std::fs::read_to_string(p).map_err(|e| {
+                        SimError::Input(format!(
+                            "hands: `{name_or_path}` is neither a built-in hand ({}) nor a readable \
+                             hand TOML or MJCF file: {e}",
+                            Self::built_in_names().join(", ")
+                        ))
+                    })?;
+                    (stem, toml::from_str(&text).map_err(|e| bad(e.to_string()))?)
+                }
             }
         };
-        let mut hand: SimHand = toml::from_str(&text)
-            .map_err(|e| SimError::Input(format!("hands: {name_or_path}: {e}")))?;
-        hand.name = name;
-        if !(0.0..=1.0).contains(&hand.squeeze) || !(0.0..=1.0).contains(&hand.preshape) {
-            return Err(SimError::Input(format!(
-                "hands: {name_or_path}: squeeze and preshape must be within [0, 1]"
+        if let Some(d) = toml.squeeze_depth
+            && !(0.0..=MAX_SQUEEZE_DEPTH).contains(&d)
+        {
+            return Err(bad(format!(
+                "squeeze_depth must be within [0, {MAX_SQUEEZE_DEPTH}] m, got {d}"
             )));
         }
-        Ok(hand)
+        let gain_scale = toml.servo_gain_scale.unwrap_or(1.0);
+        if !(gain_scale.is_finite() && (0.1..=100.0).contains(&gain_scale)) {
+            return Err(bad(format!(
+                "servo_gain_scale must be within [0.1, 100], got {gain_scale}"
+            )));
+        }
+        let model = hands_dir.join(&toml.model);
+        let derived = derive(&model).map_err(|e| match e {
+            SimError::Input(m) => bad(m),
+            other => other,
+        })?;
+        Ok(SimHand {
+            name,
+            graspd_hand: toml.graspd_hand.unwrap_or(derived.graspd_hand),
+            label: toml.label.unwrap_or(derived.label),
+            model,
+            root_body: toml.root_body.unwrap_or(derived.root_body),
+            actuators: if toml.actuators.is_empty() {
+                derived.actuators
+            } else {
+                toml.actuators
+            },
+            squeeze_depth: toml.squeeze_depth.unwrap_or(derived.squeeze_depth),
+            tactile_bodies: toml.tactile_bodies,
+            pad_friction: toml.pad_friction,
+            servo_gain_scale: gain_scale,
+        })
     }
 
     pub fn built_in_names() -> Vec<&'static str> {
         BUILT_IN.iter().map(|(n, _)| *n).collect()
     }
+}
 
-    /// The model file under `hands_dir`.
-    pub fn model_path(&self, hands_dir: &Path) -> PathBuf {
-        hands_dir.join(&self.model)
+/// What the MJCF alone gives (module rules).
+struct Derived {
+    graspd_hand: String,
+    label: String,
+    root_body: String,
+    actuators: Vec<ClosingActuator>,
+    squeeze_depth: f64,
+}
+
+fn derive(model_path: &Path) -> Result<Derived, SimError> {
+    let input = |e: String| SimError::Input(format!("{}: {e}", model_path.display()));
+    let hand = KinematicHand::from_mjcf_file(model_path).map_err(|e| input(e.to_string()))?;
+    let synergy = HandSynergy::derive(&hand).map_err(|e| input(e.to_string()))?;
+    let mj =
+        MjModel::from_xml(model_path).map_err(|e| input(format!("MuJoCo cannot load it: {e}")))?;
+    let root_body = mj
+        .id_to_name(MjtObjBase::mjOBJ_BODY, 1)
+        .ok_or_else(|| input("the model has no body".into()))?
+        .to_string();
+    // The hand open (the home pose) and closed by the synergy, every finger together.
+    let open = {
+        let mut q = hand.tree.home_configuration();
+        hand.tree
+            .project_constraints(&mut q)
+            .map_err(|e| input(e.to_string()))?;
+        q
+    };
+    let mut closed = open.clone();
+    let all: Vec<(usize, f64)> = (0..hand.fingers.len()).map(|f| (f, 1.0)).collect();
+    synergy
+        .close(&hand, &mut closed, &all)
+        .map_err(|e| input(e.to_string()))?;
+    let lengths = |q: &[f64]| -> Vec<f64> {
+        let mut data = mj.make_data();
+        for (j, joint) in hand.tree.joints.iter().enumerate() {
+            if let Some(id) = mj.name_to_id(MjtObjBase::mjOBJ_JOINT, &joint.name) {
+                data.qpos_mut()[mj.jnt_qposadr()[id] as usize] = q[j];
+            }
+        }
+        data.forward();
+        data.actuator_length().to_vec()
+    };
+    let (len_open, len_closed) = (lengths(&open), lengths(&closed));
+    let nu = mj.ffi().nu as usize;
+    let (gain, bias) = (mj.actuator_gainprm(), mj.actuator_biasprm());
+    let ctrl = mj.actuator_ctrlrange();
+    let limited = mj.actuator_forcelimited();
+    let mut actuators = Vec::new();
+    let mut all_limited = true;
+    for a in 0..nu {
+        let dl = len_closed[a] - len_open[a];
+        if dl.abs() < 1e-3 {
+            continue;
+        }
+        // A position servo: force = g·ctrl + b₁·length; its command for a length is −b₁·l/g.
+        let (g, b1) = (gain[a][0], bias[a][1]);
+        let command = |l: f64| {
+            let c = if g.abs() > 1e-12 && b1.abs() > 1e-12 {
+                -b1 * l / g
+            } else {
+                l
+            };
+            if ctrl[a][0] < ctrl[a][1] {
+                c.clamp(ctrl[a][0], ctrl[a][1])
+            } else {
+                c
+            }
+        };
+        let name = mj
+            .id_to_name(MjtObjBase::mjOBJ_ACTUATOR, a)
+            .unwrap_or_default()
+            .to_string();
+        actuators.push(ClosingActuator {
+            name,
+            open: command(len_open[a]),
+            closed: command(len_closed[a]),
+        });
+        all_limited &= limited[a];
     }
+    if actuators.is_empty() {
+        return Err(input(
+            "no actuator moves when the hand closes: graspd-sim cannot drive it".into(),
+        ));
+    }
+    Ok(Derived {
+        graspd_hand: graspd_name(&hand.tree.name),
+        label: hand.tree.name.clone(),
+        root_body,
+        actuators,
+        squeeze_depth: if all_limited {
+            MAX_SQUEEZE_DEPTH
+        } else {
+            UNLIMITED_SQUEEZE_DEPTH
+        },
+    })
+}
+
+/// A model name as a graspd hand name (letters, digits, `_`, `-`).
+fn graspd_name(model: &str) -> String {
+    let s: String = model
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c.to_ascii_lowercase()
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let s = s.trim_matches('_').to_string();
+    if s.is_empty() { "hand".into() } else { s }
 }
 
 #[cfg(test)]
@@ -99,15 +299,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn built_in_hands_parse_and_close_in_one_direction() {
-        for name in SimHand::built_in_names() {
-            let h = SimHand::load(name).unwrap();
-            assert_eq!(h.name, name);
-            assert!(!h.actuators.is_empty(), "{name}");
-            for a in &h.actuators {
-                assert!(a.open != a.closed, "{name}/{}", a.name);
-            }
-        }
-        assert!(SimHand::load("no_such_hand").is_err());
+    fn graspd_names_are_sanitised() {
+        assert_eq!(graspd_name("Shadow Hand (right)"), "shadow_hand__right");
+        assert_eq!(graspd_name("allegro_right"), "allegro_right");
+        assert_eq!(graspd_name("!!"), "hand");
     }
 }

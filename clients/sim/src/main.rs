@@ -51,7 +51,8 @@ struct Cli {
 enum Command {
     /// One trial; prints its record as JSON.
     Trial {
-        /// Built-in hand (robotiq_2f85, barrett, shadow) or a hand TOML file.
+        /// Built-in hand (robotiq_2f85, barrett, shadow, allegro), a hand TOML file or an MJCF
+        /// model (.xml, derived).
         #[arg(long)]
         hand: String,
         /// YCB object name, e.g. tomato_soup_can.
@@ -87,9 +88,13 @@ enum Command {
     },
     /// Trials over hands × objects; writes results.json, table.md and snapshots to --out.
     Bench {
-        /// Comma-separated hands.
-        #[arg(long, default_value = "robotiq_2f85,barrett,shadow")]
+        /// Comma-separated hands: built-in names, hand TOML files or MJCF models.
+        #[arg(long, default_value = "robotiq_2f85,barrett,shadow,allegro")]
         hands: String,
+        /// More hands as MJCF models (.xml), derived from the model alone (repeatable): score
+        /// your own hand.
+        #[arg(long = "hand-model")]
+        hand_models: Vec<PathBuf>,
         #[command(flatten)]
         runs: Runs,
         /// Worker threads (default: the number of cores).
@@ -182,13 +187,12 @@ fn real_main() -> Result<(), SimError> {
     };
     match cli.command {
         Command::Trial { hand, object, seed } => {
-            let hand = SimHand::load(&hand)?;
-            service.ensure_hand(&hand, &hands_dir)?;
+            let hand = SimHand::load(&hand, &hands_dir)?;
+            service.ensure_hand(&hand)?;
             let obj = SimObject::load(&objects_dir, &object)?;
             let p = placement(seed);
             let scene = Scene::build(
                 &hand,
-                &hands_dir,
                 &[(&obj, graspd_sim::scene::on_table(p[0], p[1], p[2]))],
             )?;
             let rec = run_trial(&scene, &hand, &object, &service, seed, &opts);
@@ -203,8 +207,8 @@ fn real_main() -> Result<(), SimError> {
             slip_gain,
             out,
         } => {
-            let hand = SimHand::load(&hand)?;
-            service.ensure_hand(&hand, &hands_dir)?;
+            let hand = SimHand::load(&hand, &hands_dir)?;
+            service.ensure_hand(&hand)?;
             let dist = graspd_sim::tactile::Disturbance {
                 safety,
                 pulse,
@@ -217,7 +221,6 @@ fn real_main() -> Result<(), SimError> {
                 runs.trials,
                 runs.seed,
                 &dist,
-                &hands_dir,
                 &objects_dir,
                 &service,
                 &opts,
@@ -227,13 +230,16 @@ fn real_main() -> Result<(), SimError> {
         }
         Command::Bench {
             hands,
+            hand_models,
             runs,
             jobs,
             out,
             snapshots,
         } => {
+            let mut hands = split_names(&hands);
+            hands.extend(hand_models.iter().map(|p| p.to_string_lossy().into_owned()));
             let config = BenchConfig {
-                hands: split_names(&hands),
+                hands,
                 objects: runs.objects(),
                 trials: runs.trials,
                 seed: runs.seed,

@@ -171,15 +171,15 @@ impl Scene {
     /// Compiles the scene (see [`scene_xml`]).
     pub fn build(
         hand: &SimHand,
-        hands_dir: &Path,
         objects: &[(&SimObject, Isometry3<f64>)],
     ) -> Result<Self, SimError> {
-        let xml = scene_xml(hand, &hand.model_path(hands_dir), objects)?;
+        let xml = scene_xml(hand, &hand.model.clone(), objects)?;
         if let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") {
             let _ = std::fs::write(Path::new(&dir).join("scene.xml"), &xml);
         }
-        let model = MjModel::from_xml_string(&xml)
+        let mut model = MjModel::from_xml_string(&xml)
             .map_err(|e| SimError::Sim(format!("compiling the scene: {e}")))?;
+        scale_servo_gains(&mut model, hand.servo_gain_scale);
         let id = |t: MjtObjBase, name: &str| {
             model
                 .name_to_id(t, name)
@@ -270,4 +270,28 @@ pub fn on_table(x: f64, y: f64, yaw: f64) -> Isometry3<f64> {
         Translation3::from(Vector3::new(x, y, 0.001)),
         UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw),
     )
+}
+
+/// Multiplies the position gain of every hand actuator and its stiffness bias by `scale`
+/// ([`SimHand::servo_gain_scale`]): force = s·kp·(ctrl − length), the same equilibrium.
+fn scale_servo_gains(model: &mut MjModel, scale: f64) {
+    if scale == 1.0 {
+        return;
+    }
+    let hand: Vec<bool> = (0..model.ffi().nu as usize)
+        .map(|a| {
+            model
+                .id_to_name(MjtObjBase::mjOBJ_ACTUATOR, a)
+                .is_some_and(|n| n.starts_with(HAND_PREFIX))
+        })
+        .collect();
+    // SAFETY: plain numbers of a compiled model no data was made from yet.
+    let gain = unsafe { model.actuator_gainprm_mut() };
+    for (a, _) in hand.iter().enumerate().filter(|(_, h)| **h) {
+        gain[a][0] *= scale;
+    }
+    let bias = model.actuator_biasprm_mut();
+    for (a, _) in hand.iter().enumerate().filter(|(_, h)| **h) {
+        bias[a][1] *= scale;
+    }
 }

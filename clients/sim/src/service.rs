@@ -46,7 +46,7 @@ impl Service {
 
     /// Makes sure graspd knows the hand: GetHand, and RegisterHand with the model file and every
     /// mesh beside it when it does not. Returns whether it registered.
-    pub fn ensure_hand(&self, hand: &SimHand, hands_dir: &Path) -> Result<bool, SimError> {
+    pub fn ensure_hand(&self, hand: &SimHand) -> Result<bool, SimError> {
         let mut c = self.client.clone();
         let name = hand.graspd_hand.clone();
         match self
@@ -57,7 +57,7 @@ impl Service {
             Err(s) if s.code() == tonic::Code::NotFound => {}
             Err(s) => return Err(SimError::Service(format!("GetHand {name}: {s}"))),
         }
-        let model = hand.model_path(hands_dir);
+        let model = hand.model.clone();
         let dir = model.parent().unwrap_or(Path::new("."));
         let text = std::fs::read_to_string(&model)
             .map_err(|e| SimError::Input(format!("hands: {}: {e}", model.display())))?;
@@ -136,6 +136,7 @@ impl Service {
             )),
             options: Some(pb::PlannerOptions {
                 seed: Some(seed),
+                squeeze_depth: Some(hand.squeeze_depth),
                 ..Default::default()
             }),
             hints: Some(pb::PlanHints {

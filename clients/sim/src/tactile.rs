@@ -291,7 +291,7 @@ pub fn run_disturbance_trial(
         }
     };
     let mut rec = TrialRecord::empty(hand, object, seed, place);
-    let approached = match pre_grasp_and_approach(&mut trial, hand, &plan, start, &mut rec) {
+    let approached = match pre_grasp_and_approach(&mut trial, &plan, start, &mut rec) {
         Ok(a) => a,
         Err(o) => {
             out.detail = format!("{}: {}", o.name(), rec.detail);
@@ -437,7 +437,6 @@ pub fn run_protocol(
     trials: usize,
     seed: u64,
     dist: &Disturbance,
-    hands_dir: &std::path::Path,
     objects_dir: &std::path::Path,
     service: &Service,
     opts: &TrialOptions,
@@ -448,11 +447,7 @@ pub fn run_protocol(
     let mut records = Vec::new();
     for name in objects {
         let obj = crate::object::SimObject::load(objects_dir, name)?;
-        let scene = Scene::build(
-            hand,
-            hands_dir,
-            &[(&obj, crate::scene::on_table(0.0, 0.0, 0.0))],
-        )?;
+        let scene = Scene::build(hand, &[(&obj, crate::scene::on_table(0.0, 0.0, 0.0))])?;
         for i in 0..trials {
             for stabilized in [false, true] {
                 let r = run_disturbance_trial(

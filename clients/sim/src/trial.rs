@@ -129,6 +129,16 @@ pub struct TrialRecord {
     pub final_height: Option<f64>,
     /// Hand bodies touching the object after closing.
     pub contact_bodies: Option<usize>,
+    /// The executed plan's approach direction, robustness figure and contacts (finger names).
+    pub approach: Option<[f64; 3]>,
+    pub robustness: Option<f64>,
+    pub planned_contacts: Vec<String>,
+    /// How far the object moved during the approach and during the close, mm, and how much it
+    /// turned during the close, degrees; the hand bodies touching it after closing.
+    pub moved_approach_mm: Option<f64>,
+    pub moved_close_mm: Option<f64>,
+    pub turned_close_deg: Option<f64>,
+    pub touching_bodies: Vec<String>,
     /// Object placement (x, y, yaw).
     pub placement: [f64; 3],
     /// The snapshot after the hold (when asked for and the object got that far).
@@ -158,6 +168,13 @@ impl TrialRecord {
             lift_height: None,
             final_height: None,
             contact_bodies: None,
+            approach: None,
+            robustness: None,
+            planned_contacts: Vec::new(),
+            moved_approach_mm: None,
+            moved_close_mm: None,
+            turned_close_deg: None,
+            touching_bodies: Vec::new(),
             placement: place,
             snapshot: None,
         }
@@ -249,6 +266,47 @@ impl<'a> Trial<'a> {
         Point3::new(q[0], q[1], q[2])
     }
 
+    /// Object 0's orientation.
+    pub fn object_orientation(&self) -> nalgebra::UnitQuaternion<f64> {
+        let a = self.scene.object_qpos[0];
+        let q = &self.data.qpos()[a + 3..a + 7];
+        nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]))
+    }
+
+    /// Names (without the hand prefix) of the hand bodies touching object 0.
+    pub fn hand_body_names_touching(&self) -> Vec<String> {
+        let m = &self.scene.model;
+        let obj = self.scene.object_bodies[0];
+        let bodyof = m.geom_bodyid();
+        let mut names: Vec<String> = Vec::new();
+        for c in self.data.contact() {
+            let (b1, b2) = (
+                bodyof[c.geom[0] as usize] as usize,
+                bodyof[c.geom[1] as usize] as usize,
+            );
+            let other = if b1 == obj {
+                b2
+            } else if b2 == obj {
+                b1
+            } else {
+                continue;
+            };
+            if self.scene.hand_bodies[other] && c.dist < 0.002 {
+                let n = m
+                    .id_to_name(MjtObjBase::mjOBJ_BODY, other)
+                    .unwrap_or_default();
+                let n = n
+                    .strip_prefix(crate::scene::HAND_PREFIX)
+                    .unwrap_or(n)
+                    .to_string();
+                if !names.contains(&n) {
+                    names.push(n);
+                }
+            }
+        }
+        names
+    }
+
     /// Object 0's centre of mass.
     pub fn object_com(&self) -> Point3<f64> {
         Point3::from(self.data.xipos()[self.scene.object_bodies[0]])
@@ -310,10 +368,9 @@ impl<'a> Trial<'a> {
         camera::render(self.scene, &mut self.data, intr, camera)
     }
 
-    /// Closing commands: each closing actuator's command at the planned joints (the position
-    /// servo's equilibrium, `-bias₁·length/gain₀`), plus `squeeze` of its open → closed span
-    /// (negative: toward open), clamped to the span. Every other actuator: its command at the planned joints.
-    fn planned_commands(&mut self, joints: &[(String, f64)], squeeze: f64) -> Vec<f64> {
+    /// Every actuator's command at `joints` (a position servo's equilibrium there,
+    /// `-bias₁·length/gain₀`), within its control range.
+    fn planned_commands(&mut self, joints: &[(String, f64)]) -> Vec<f64> {
         let saved: Vec<f64> = self.data.qpos().to_vec();
         self.set_hand_joints(joints);
         self.data.forward();
@@ -331,10 +388,6 @@ impl<'a> Trial<'a> {
                 }
             })
             .collect();
-        for &(a, open, closed) in &self.scene.closing {
-            let (lo, hi) = (open.min(closed), open.max(closed));
-            cmd[a] = (cmd[a] + squeeze * (closed - open)).clamp(lo, hi);
-        }
         let range = m.actuator_ctrlrange();
         for (a, c) in cmd.iter_mut().enumerate() {
             if range[a][0] < range[a][1] {
@@ -406,7 +459,7 @@ pub fn run_trial(
             rec.detail = format!("{}: {}", s.code(), s.message());
             Outcome::NoPlan
         }
-        Ok(plan) => execute(&mut trial, hand, &plan, start, opts, &mut rec),
+        Ok(plan) => execute(&mut trial, &plan, start, opts, &mut rec),
     };
     rec.outcome = outcome;
     sim_s += t_sim.elapsed().as_secs_f64();
@@ -418,7 +471,9 @@ pub fn run_trial(
 pub struct Approached {
     /// The base pose of the grasp (the plan's root_pose).
     pub root: Isometry3<f64>,
-    /// Per actuator: its command at the planned joints plus the hand's squeeze.
+    /// Per actuator: its command at the planned (touching) joints.
+    pub grasp: Vec<f64>,
+    /// Per actuator: its command at the squeeze, where the closing ends.
     pub closed: Vec<f64>,
     /// The object's centre of mass before anything touched it.
     pub start_com: Point3<f64>,
@@ -428,7 +483,6 @@ pub struct Approached {
 /// `Err` with the failure class when the plan has no joints or the approach collides.
 pub fn pre_grasp_and_approach(
     trial: &mut Trial,
-    hand: &SimHand,
     plan: &PlanResult,
     start: Point3<f64>,
     rec: &mut TrialRecord,
@@ -442,6 +496,9 @@ pub fn pre_grasp_and_approach(
     rec.type_source = Some(r.type_source.clone());
     rec.feasible = Some(r.feasible);
     rec.infeasible_reason = r.infeasible_reason.clone();
+    rec.approach = r.approach.map(|a| [a.x, a.y, a.z]);
+    rec.robustness = r.quality.map(|q| q.robustness);
+    rec.planned_contacts = r.contacts.iter().map(|c| c.finger.clone()).collect();
     let (Some(root), Some(hand_pose), Some(pre)) = (
         pose_from_proto(&r.root_pose),
         pose_from_proto(&r.hand_pose),
@@ -450,16 +507,38 @@ pub fn pre_grasp_and_approach(
         rec.detail = "the plan has no root_pose (the hand has no kinematics)".into();
         return Err(Outcome::NoPlan);
     };
-    let joints: Vec<(String, f64)> = r.joints.iter().map(|j| (j.name.clone(), j.angle)).collect();
-    let closed = trial.planned_commands(&joints, hand.squeeze);
-    // Pre-grasp: the planned joints with each closing actuator opened by `preshape` of its span.
-    let opened = trial.planned_commands(&joints, -hand.preshape);
-    let pre_root = pre * hand_pose.inverse() * root;
-    trial.set_hand_joints(&joints);
-    for (a, c) in closed.iter().enumerate() {
-        let closing = trial.scene.closing.iter().any(|&(ca, _, _)| ca == a);
-        trial.data.ctrl_mut()[a] = if closing { opened[a] } else { *c };
+    let named = |j: &[graspd_proto::v1::JointAngle]| -> Vec<(String, f64)> {
+        j.iter().map(|j| (j.name.clone(), j.angle)).collect()
+    };
+    let joints = named(&r.joints);
+    let (pre_joints, squeeze_joints) = (named(&r.pregrasp_joints), named(&r.squeeze_joints));
+    // Executed as planned: every actuator at its command for the pre-grasp joints, then through
+    // the touching joints to the squeeze.
+    if pre_joints.is_empty() || squeeze_joints.is_empty() {
+        rec.detail = "the plan has no pre-grasp or squeeze joints".into();
+        return Err(Outcome::NoPlan);
     }
+    let opened = trial.planned_commands(&pre_joints);
+    let grasp = trial.planned_commands(&joints);
+    let closed = trial.planned_commands(&squeeze_joints);
+    let pre_root = pre * hand_pose.inverse() * root;
+    if std::env::var_os("GRASPD_SIM_DEBUG_DIR").is_some() {
+        // The plan as graspd means it: the hand posed at the grasp and the squeeze, no physics.
+        let saved = trial.data.qpos().to_vec();
+        for (name, q) in [("planned", &joints), ("squeeze", &squeeze_joints)] {
+            trial.place_base(&root);
+            trial.set_hand_joints(q);
+            debug_snapshot(trial, name);
+        }
+        trial.data.qpos_mut().copy_from_slice(&saved);
+        trial.data.forward();
+    }
+    trial.set_hand_joints(if pre_joints.is_empty() {
+        &joints
+    } else {
+        &pre_joints
+    });
+    trial.data.ctrl_mut().copy_from_slice(&opened);
     trial.place_base(&pre_root);
     trial.data.forward();
     trial.run(PRESHAPE_S, |_, _| {});
@@ -476,12 +555,14 @@ pub fn pre_grasp_and_approach(
         return Err(Outcome::IkCollision);
     }
     let pushed = (trial.object_position() - start).norm();
+    rec.moved_approach_mm = Some(pushed * 1e3);
     if pushed > PUSH_M {
         rec.detail = format!("the approach pushed the object {:.0} mm", pushed * 1e3);
         return Err(Outcome::IkCollision);
     }
     Ok(Approached {
         root,
+        grasp,
         closed,
         start_com,
     })
@@ -490,7 +571,6 @@ pub fn pre_grasp_and_approach(
 /// Steps 3–7 of the protocol on a plan.
 fn execute(
     trial: &mut Trial,
-    hand: &SimHand,
     plan: &PlanResult,
     start: Point3<f64>,
     opts: &TrialOptions,
@@ -498,26 +578,39 @@ fn execute(
 ) -> Outcome {
     let Approached {
         root,
+        grasp,
         closed,
         start_com,
-    } = match pre_grasp_and_approach(trial, hand, plan, start, rec) {
+    } = match pre_grasp_and_approach(trial, plan, start, rec) {
         Ok(a) => a,
         Err(o) => return o,
     };
-    // Close: the closing actuators ramp from the pre-shape to the planned joints plus the
-    // squeeze. (A guarded close — each actuator holding at first touch, then all squeezing
-    // together — was measured on the Table 5.2 run and did no better: 77.5 / 33.8 / 37.5 %.)
+    // Close: every actuator together from the pre-grasp through the touching joints (first
+    // two thirds of the time) to the squeeze.
     let open: Vec<f64> = trial.data.ctrl().to_vec();
-    let closing = trial.scene.closing.clone();
-    trial.run(CLOSE_S, |t, f| {
-        for &(a, _, _) in &closing {
-            t.data.ctrl_mut()[a] = open[a] + (closed[a] - open[a]) * f;
-        }
-    });
+    let (before_p, before_q) = (trial.object_position(), trial.object_orientation());
+    for (k, phase) in ["closing_1", "closing_2", "closing_3"].iter().enumerate() {
+        trial.run(CLOSE_S / 3.0, |t, f| {
+            let f = (k as f64 + f) / 3.0;
+            let (from, to, g) = if f < 2.0 / 3.0 {
+                (&open, &grasp, f * 1.5)
+            } else {
+                (&grasp, &closed, (f - 2.0 / 3.0) * 3.0)
+            };
+            for (a, c) in t.data.ctrl_mut().iter_mut().enumerate() {
+                *c = from[a] + (to[a] - from[a]) * g;
+            }
+        });
+        debug_snapshot(trial, phase);
+    }
     trial.run(CLOSE_SETTLE_S, |_, _| {});
     debug_snapshot(trial, "closed");
+    debug_forces(trial, "closed", &closed);
     let touching = trial.hand_bodies_touching();
     rec.contact_bodies = Some(touching);
+    rec.moved_close_mm = Some((trial.object_position() - before_p).norm() * 1e3);
+    rec.turned_close_deg = Some(before_q.angle_to(&trial.object_orientation()).to_degrees());
+    rec.touching_bodies = trial.hand_body_names_touching();
     if touching < 2 {
         rec.detail = format!("{touching} hand bodies touch the object after closing");
         return Outcome::MissedContact;
@@ -567,16 +660,89 @@ fn execute(
     Outcome::Success
 }
 
-/// With GRASPD_SIM_DEBUG_DIR set, saves a picture of each phase there (for looking at a trial).
+/// With GRASPD_SIM_DEBUG_DIR set, saves a picture of each phase there (for looking at a trial):
+/// two close views of the object, from the front left and from the right.
 fn debug_snapshot(trial: &mut Trial, phase: &str) {
     if let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") {
-        let view = camera::look_at(Point3::new(-0.35, -0.3, 0.3), Point3::new(0.0, 0.0, 0.06));
-        let img = trial.render(Intrinsics::kinect(480, 360), view);
-        let _ = crate::bench::save_png(
-            &img,
-            &std::path::Path::new(&dir).join(format!("{phase}.png")),
+        let o = trial.object_position() + Vector3::new(0.0, 0.0, 0.05);
+        let mut imgs = Vec::new();
+        for eye in [
+            Vector3::new(-0.22, -0.2, 0.18),
+            Vector3::new(0.25, -0.12, 0.2),
+        ] {
+            let view = camera::look_at(o + eye, o);
+            imgs.push(trial.render(Intrinsics::kinect(360, 270), view));
+        }
+        let (w, h) = (imgs[0].intrinsics.width, imgs[0].intrinsics.height);
+        let mut rgb = Vec::with_capacity(imgs[0].rgb.len() * 2);
+        for row in 0..h as usize {
+            for img in &imgs {
+                let stride = 3 * w as usize;
+                rgb.extend_from_slice(&img.rgb[row * stride..(row + 1) * stride]);
+            }
+        }
+        let _ = image::save_buffer(
+            std::path::Path::new(&dir).join(format!("{phase}.png")),
+            &rgb,
+            2 * w,
+            h,
+            image::ExtendedColorType::Rgb8,
         );
     }
+}
+
+/// With GRASPD_SIM_DEBUG_DIR set, appends the hand's normal force on the object, each
+/// actuator's command, position error and force to `forces.txt` (for looking at a grip).
+fn debug_forces(trial: &Trial, phase: &str, target: &[f64]) {
+    let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") else {
+        return;
+    };
+    let obj = trial.scene.object_bodies[0];
+    let m = &trial.scene.model;
+    let bodyof = m.geom_bodyid();
+    let mut normal = 0.0;
+    let mut per_body: std::collections::BTreeMap<String, f64> = Default::default();
+    for (i, c) in trial.data.contact().iter().enumerate() {
+        let (b1, b2) = (
+            bodyof[c.geom[0] as usize] as usize,
+            bodyof[c.geom[1] as usize] as usize,
+        );
+        let other = if b1 == obj {
+            b2
+        } else if b2 == obj {
+            b1
+        } else {
+            continue;
+        };
+        if trial.scene.hand_bodies[other] {
+            let f = trial.data.contact_force(i)[0].max(0.0);
+            normal += f;
+            let name = m
+                .id_to_name(MjtObjBase::mjOBJ_BODY, other)
+                .unwrap_or_default()
+                .to_string();
+            *per_body.entry(name).or_default() += f;
+        }
+    }
+    let mut text = format!("{phase}: normal force on the object {normal:.2} N\n");
+    for (b, f) in &per_body {
+        text += &format!("  {b}: {f:.2} N\n");
+    }
+    let nu = m.ffi().nu as usize;
+    let len = trial.data.actuator_length();
+    let force = trial.data.actuator_force();
+    for a in 0..nu {
+        let name = m
+            .id_to_name(MjtObjBase::mjOBJ_ACTUATOR, a)
+            .unwrap_or_default();
+        text += &format!(
+            "  {name}: target {:.3} length {:.3} force {:.3}\n",
+            target[a], len[a], force[a]
+        );
+    }
+    let path = std::path::Path::new(&dir).join("forces.txt");
+    let old = std::fs::read_to_string(&path).unwrap_or_default();
+    let _ = std::fs::write(path, old + &text);
 }
 
 /// Smoothstep 0 → 1 (zero velocity at both ends).

@@ -1,6 +1,7 @@
-//! graspd-sim against MuJoCo and a real graspd on loopback (issue 7): a scene builds and steps,
-//! the camera measures what geometry says, and a Robotiq 2F-85 trial on the tomato soup can
-//! succeeds end to end, with the hand registered over gRPC by the client itself.
+//! graspd-sim against MuJoCo and a real graspd on loopback (issues 7 and 15): a scene builds and
+//! steps, the camera measures what geometry says, each shared hand derived from its MJCF closes
+//! toward its palm, and Robotiq 2F-85, Shadow and Allegro trials succeed end to end, with the
+//! hand registered over gRPC by the client itself.
 
 use graspd_e2e::Server;
 use graspd_sim::bench::{BenchConfig, run_bench};
@@ -28,7 +29,7 @@ fn testdata() -> Option<PathBuf> {
 #[test]
 fn a_scene_builds_and_steps_with_the_object_at_rest_on_the_table() {
     let Some(data) = testdata() else { return };
-    let hand = SimHand::load("robotiq_2f85").unwrap();
+    let hand = SimHand::load("robotiq_2f85", &data.join("hands")).unwrap();
     let scene = can_scene(&data, &hand);
     let mut trial = Trial::new(&scene, [0.02, -0.01, 0.5]);
     trial.run(1.0, |_, _| {});
@@ -53,6 +54,61 @@ fn a_scene_builds_and_steps_with_the_object_at_rest_on_the_table() {
     assert_eq!(trial.hand_bodies_touching(), 0);
 }
 
+/// Each shared MJCF hand as derived from its model alone: closing actuators found, and driving
+/// them from their open to their closed commands in MuJoCo (the hand alone, fixed in the world)
+/// brings every fingertip closer to the palm's grasp centre (graspd's `HandSynergy::grasp_centre`,
+/// the point in front of the palm the fingers close on), by at least 1 cm; the squeeze depth lies
+/// within graspd's bounds.
+#[test]
+fn each_derived_hand_closes_toward_the_palm() {
+    use graspd_core::hand::kinematics::{HandSynergy, KinematicHand};
+    use graspd_sim::scene::from_mj;
+    use mujoco_rs::prelude::*;
+    let Some(data) = testdata() else { return };
+    for name in SimHand::built_in_names() {
+        let hand = SimHand::load(name, &data.join("hands")).unwrap();
+        println!(
+            "{name}: squeeze {:.1} mm, actuators {:?}",
+            hand.squeeze_depth * 1e3,
+            hand.actuators
+        );
+        assert!(!hand.actuators.is_empty(), "{name}");
+        assert!((0.005..=0.05).contains(&hand.squeeze_depth), "{name}");
+        let k = KinematicHand::from_mjcf_file(&hand.model).unwrap();
+        let centre = HandSynergy::derive(&k).unwrap().grasp_centre;
+        let mj = MjModel::from_xml(&hand.model).unwrap();
+        let body = |b: usize| {
+            mj.name_to_id(MjtObjBase::mjOBJ_BODY, &k.tree.bodies[b].name)
+                .unwrap()
+        };
+        let settle = |command: fn(&graspd_sim::hand::ClosingActuator) -> f64| {
+            let mut d = mj.make_data();
+            for a in &hand.actuators {
+                let id = mj.name_to_id(MjtObjBase::mjOBJ_ACTUATOR, &a.name).unwrap();
+                d.ctrl_mut()[id] = command(a);
+            }
+            for _ in 0..(1.5 / mj.opt().timestep) as usize {
+                d.step();
+            }
+            let pose = |b: usize| from_mj(&d.xpos()[body(b)], &d.xquat()[body(b)]);
+            let palm = pose(k.palm) * k.hand_frame() * centre;
+            k.fingers
+                .iter()
+                .map(|f| (pose(f.tip) * f.tip_point - palm).norm())
+                .collect::<Vec<f64>>()
+        };
+        let (open, closed) = (settle(|a| a.open), settle(|a| a.closed));
+        println!("{name}: tip to palm open {open:.3?} closed {closed:.3?}");
+        for (f, (o, c)) in k.fingers.iter().zip(open.iter().zip(&closed)) {
+            assert!(
+                c < &(o - 0.01),
+                "{name} {}: {o:.3} m open, {c:.3} m closed",
+                f.name
+            );
+        }
+    }
+}
+
 /// The camera against hand-computed geometry: the default view's optical axis passes through
 /// (0, 0, 0.05) from 0.55 m at 50° elevation and meets the table (z = 0) at
 /// t = 0.55 · (0.05 + 0.55 sin 50°) / (0.55 sin 50°) = 0.6153 m; with the can moved out of the
@@ -61,7 +117,7 @@ fn a_scene_builds_and_steps_with_the_object_at_rest_on_the_table() {
 #[test]
 fn the_camera_measures_depth_along_the_optical_axis() {
     let Some(data) = testdata() else { return };
-    let hand = SimHand::load("robotiq_2f85").unwrap();
+    let hand = SimHand::load("robotiq_2f85", &data.join("hands")).unwrap();
     let scene = can_scene(&data, &hand);
     let intr = Intrinsics::kinect(641, 481); // odd sizes put a pixel exactly on the axis
     let centre = 240 * 641 + 320;
@@ -106,15 +162,9 @@ fn a_robotiq_trial_on_the_tomato_soup_can_succeeds_against_graspd() {
     let rt = tokio::runtime::Runtime::new().unwrap();
     let service =
         Service::connect(&format!("http://{}", server.grpc_addr), rt.handle().clone()).unwrap();
-    let hand = SimHand::load("robotiq_2f85").unwrap();
-    assert!(
-        service.ensure_hand(&hand, &data.join("hands")).unwrap(),
-        "registered"
-    );
-    assert!(
-        !service.ensure_hand(&hand, &data.join("hands")).unwrap(),
-        "known now"
-    );
+    let hand = SimHand::load("robotiq_2f85", &data.join("hands")).unwrap();
+    assert!(service.ensure_hand(&hand).unwrap(), "registered");
+    assert!(!service.ensure_hand(&hand).unwrap(), "known now");
     let scene = can_scene(&data, &hand);
     let opts = trial_options();
     let rec = run_trial(&scene, &hand, "tomato_soup_can", &service, 0, &opts);
@@ -158,6 +208,30 @@ fn a_robotiq_trial_on_the_tomato_soup_can_succeeds_against_graspd() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// The dexterous hands end to end on loopback, each from a single RGB-D view with the hand as
+/// graspd-sim derives it from the MJCF: the Shadow hand lifts, holds and shakes the tomato soup
+/// can, the Allegro hand the orange (seed 0), each executing graspd's pre-grasp, touching and
+/// squeeze joints.
+#[test]
+fn a_shadow_and_an_allegro_trial_succeed_against_graspd() {
+    let Some(data) = testdata() else { return };
+    let server = Server::start();
+    let rt = tokio::runtime::Runtime::new().unwrap();
+    let service =
+        Service::connect(&format!("http://{}", server.grpc_addr), rt.handle().clone()).unwrap();
+    for (name, object) in [("shadow", "tomato_soup_can"), ("allegro", "orange")] {
+        let hand = SimHand::load(name, &data.join("hands")).unwrap();
+        service.ensure_hand(&hand).unwrap();
+        let o = SimObject::load(&data.join("objects"), object).unwrap();
+        let scene = Scene::build(&hand, &[(&o, on_table(0.0, 0.0, 0.0))]).unwrap();
+        let rec = run_trial(&scene, &hand, object, &service, 0, &trial_options());
+        println!("{}", serde_json::to_string_pretty(&rec).unwrap());
+        assert_eq!(rec.outcome, Outcome::Success, "{name} on {object}: {}", rec.detail);
+        assert!(rec.final_height.unwrap() > 0.08, "{name}: {:?}", rec.final_height);
+        assert!(rec.contact_bodies.unwrap() >= 3, "{name}: {:?}", rec.touching_bodies);
+    }
+}
+
 /// The tactile closed loop against graspd's Stabilize stream: on the tomato soup can (seed 0)
 /// the constant-force grip loses the can under the added load, and the grip whose force graspd
 /// sets from the simulated BioTac readings keeps it — graspd reported slip and raised f_d.
@@ -174,7 +248,7 @@ fn the_stabilized_grip_keeps_the_can_the_constant_grip_loses() {
     let rt = tokio::runtime::Runtime::new().unwrap();
     let service =
         Service::connect(&format!("http://{}", server.grpc_addr), rt.handle().clone()).unwrap();
-    let hand = SimHand::load("robotiq_2f85").unwrap();
+    let hand = SimHand::load("robotiq_2f85", &data.join("hands")).unwrap();
     let scene = can_scene(&data, &hand);
     let opts = trial_options();
     let dist = Disturbance::default();
@@ -209,12 +283,7 @@ fn the_stabilized_grip_keeps_the_can_the_constant_grip_loses() {
 /// The tomato soup can on the table with `hand`.
 fn can_scene(data: &std::path::Path, hand: &SimHand) -> Scene {
     let can = SimObject::load(&data.join("objects"), "tomato_soup_can").unwrap();
-    Scene::build(
-        hand,
-        &data.join("hands"),
-        &[(&can, on_table(0.0, 0.0, 0.0))],
-    )
-    .unwrap()
+    Scene::build(hand, &[(&can, on_table(0.0, 0.0, 0.0))]).unwrap()
 }
 
 /// The default camera at 640×480, RGB-D input, no re-planning, no snapshot.
