@@ -63,8 +63,8 @@ models-tactile:
 	models/tactile/train.sh
 
 # The grasp benchmark in MuJoCo (clients/sim/README.md): starts a release graspd on loopback and
-# runs graspd-sim bench over the Table 5.2 objects with the Robotiq 2F-85, Barrett and Shadow
-# hands, 10 trials each; results in sim-results/.
+# runs graspd-sim bench over the Table 5.2 objects with the Robotiq 2F-85, Barrett, Shadow and
+# Allegro hands, 10 trials each (about 5 minutes on two cores); results in sim-results/.
 # `make sim-stabilize` runs the tactile closed loop against a constant-force baseline under an
 # added load (graspd-sim stabilize; results in sim-results/).
 SIM_ARGS ?=

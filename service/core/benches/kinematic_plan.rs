@@ -1,8 +1,9 @@
 //! The added cost of a hand's kinematics per plan (issue 6): for each shared hand
 //! (../shared/testdata/hands), plans on 2,000-point single views of the Table 5.2 YCB objects,
 //! once with the description derived from the model only (the parametric planner) and once with
-//! the kinematics (IK jointly with the palm pose and collision with the model's own geometry at
-//! every new stage-2 optimum, then the final joints). One thread; medians over objects × seeds.
+//! the kinematics (stage 1, then the final-configuration search with the model in the loop:
+//! placement, closing sweep, squeeze, pre-grasp; docs/final-configuration.md). "final joints" is
+//! the time of that search (`timings.finalize`). One thread; medians over objects × seeds.
 //! `cargo bench -p graspd-core --bench kinematic_plan` (`-- --quick`: 2 seeds).
 
 use graspd_core::hand::kinematics::KinematicHand;
