@@ -226,9 +226,22 @@ fn a_shadow_and_an_allegro_trial_succeed_against_graspd() {
         let scene = Scene::build(&hand, &[(&o, on_table(0.0, 0.0, 0.0))]).unwrap();
         let rec = run_trial(&scene, &hand, object, &service, 0, &trial_options());
         println!("{}", serde_json::to_string_pretty(&rec).unwrap());
-        assert_eq!(rec.outcome, Outcome::Success, "{name} on {object}: {}", rec.detail);
-        assert!(rec.final_height.unwrap() > 0.08, "{name}: {:?}", rec.final_height);
-        assert!(rec.contact_bodies.unwrap() >= 3, "{name}: {:?}", rec.touching_bodies);
+        assert_eq!(
+            rec.outcome,
+            Outcome::Success,
+            "{name} on {object}: {}",
+            rec.detail
+        );
+        assert!(
+            rec.final_height.unwrap() > 0.08,
+            "{name}: {:?}",
+            rec.final_height
+        );
+        assert!(
+            rec.contact_bodies.unwrap() >= 3,
+            "{name}: {:?}",
+            rec.touching_bodies
+        );
     }
 }
 
