@@ -156,17 +156,10 @@ pub struct DisturbanceRecord {
 /// Normal force on the object and slip speed at the contact for pad body `pad`.
 fn pad_state(trial: &Trial, pad: usize) -> (f64, f64) {
     let obj = trial.scene.object_bodies[0];
-    let bodyof = trial.scene.model.geom_bodyid();
     let mut normal = 0.0;
     let mut slip: f64 = 0.0;
-    for (i, c) in trial.data.contact().iter().enumerate() {
-        let (b1, b2) = (
-            bodyof[c.geom[0] as usize] as usize,
-            bodyof[c.geom[1] as usize] as usize,
-        );
-        if !((b1 == pad && b2 == obj) || (b1 == obj && b2 == pad)) {
-            continue;
-        }
+    for (i, _) in trial.hand_contacts_with_object().filter(|&(_, b)| b == pad) {
+        let c = &trial.data.contact()[i];
         normal += trial.data.contact_force(i)[0].max(0.0);
         let n = Vector3::new(c.frame[0], c.frame[1], c.frame[2]);
         let p = Point3::from(c.pos);

@@ -273,38 +273,53 @@ impl<'a> Trial<'a> {
         nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]))
     }
 
+    /// Contacts between object 0 and a hand body: (index into the contact list, the hand body).
+    pub fn hand_contacts_with_object(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        let obj = self.scene.object_bodies[0];
+        let bodyof = self.scene.model.geom_bodyid();
+        self.data
+            .contact()
+            .iter()
+            .enumerate()
+            .filter_map(move |(i, c)| {
+                let (b1, b2) = (
+                    bodyof[c.geom[0] as usize] as usize,
+                    bodyof[c.geom[1] as usize] as usize,
+                );
+                let other = if b1 == obj {
+                    b2
+                } else if b2 == obj {
+                    b1
+                } else {
+                    return None;
+                };
+                self.scene.hand_bodies[other].then_some((i, other))
+            })
+    }
+
+    /// Distinct hand bodies within 2 mm of object 0, in contact-list order.
+    fn hand_bodies_near_object(&self) -> Vec<usize> {
+        let mut bodies: Vec<usize> = Vec::new();
+        for (i, b) in self.hand_contacts_with_object() {
+            if self.data.contact()[i].dist < 0.002 && !bodies.contains(&b) {
+                bodies.push(b);
+            }
+        }
+        bodies
+    }
+
     /// Names (without the hand prefix) of the hand bodies touching object 0.
     pub fn hand_body_names_touching(&self) -> Vec<String> {
         let m = &self.scene.model;
-        let obj = self.scene.object_bodies[0];
-        let bodyof = m.geom_bodyid();
-        let mut names: Vec<String> = Vec::new();
-        for c in self.data.contact() {
-            let (b1, b2) = (
-                bodyof[c.geom[0] as usize] as usize,
-                bodyof[c.geom[1] as usize] as usize,
-            );
-            let other = if b1 == obj {
-                b2
-            } else if b2 == obj {
-                b1
-            } else {
-                continue;
-            };
-            if self.scene.hand_bodies[other] && c.dist < 0.002 {
-                let n = m
-                    .id_to_name(MjtObjBase::mjOBJ_BODY, other)
-                    .unwrap_or_default();
-                let n = n
-                    .strip_prefix(crate::scene::HAND_PREFIX)
+        self.hand_bodies_near_object()
+            .into_iter()
+            .map(|b| {
+                let n = m.id_to_name(MjtObjBase::mjOBJ_BODY, b).unwrap_or_default();
+                n.strip_prefix(crate::scene::HAND_PREFIX)
                     .unwrap_or(n)
-                    .to_string();
-                if !names.contains(&n) {
-                    names.push(n);
-                }
-            }
-        }
-        names
+                    .to_string()
+            })
+            .collect()
     }
 
     /// Object 0's centre of mass.
@@ -326,25 +341,7 @@ impl<'a> Trial<'a> {
 
     /// Distinct hand bodies in contact with object 0.
     pub fn hand_bodies_touching(&self) -> usize {
-        let m = &self.scene.model;
-        let obj = self.scene.object_bodies[0];
-        let bodyof = m.geom_bodyid();
-        let mut bodies: Vec<usize> = Vec::new();
-        for c in self.data.contact() {
-            let (g1, g2) = (c.geom[0] as usize, c.geom[1] as usize);
-            let (b1, b2) = (bodyof[g1] as usize, bodyof[g2] as usize);
-            let other = if b1 == obj {
-                b2
-            } else if b2 == obj {
-                b1
-            } else {
-                continue;
-            };
-            if self.scene.hand_bodies[other] && c.dist < 0.002 && !bodies.contains(&other) {
-                bodies.push(other);
-            }
-        }
-        bodies.len()
+        self.hand_bodies_near_object().len()
     }
 
     /// Deepest penetration of a hand geom into the table, m (0 when none touches).
@@ -697,32 +694,17 @@ fn debug_forces(trial: &Trial, phase: &str, target: &[f64]) {
     let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") else {
         return;
     };
-    let obj = trial.scene.object_bodies[0];
     let m = &trial.scene.model;
-    let bodyof = m.geom_bodyid();
     let mut normal = 0.0;
     let mut per_body: std::collections::BTreeMap<String, f64> = Default::default();
-    for (i, c) in trial.data.contact().iter().enumerate() {
-        let (b1, b2) = (
-            bodyof[c.geom[0] as usize] as usize,
-            bodyof[c.geom[1] as usize] as usize,
-        );
-        let other = if b1 == obj {
-            b2
-        } else if b2 == obj {
-            b1
-        } else {
-            continue;
-        };
-        if trial.scene.hand_bodies[other] {
-            let f = trial.data.contact_force(i)[0].max(0.0);
-            normal += f;
-            let name = m
-                .id_to_name(MjtObjBase::mjOBJ_BODY, other)
-                .unwrap_or_default()
-                .to_string();
-            *per_body.entry(name).or_default() += f;
-        }
+    for (i, other) in trial.hand_contacts_with_object() {
+        let f = trial.data.contact_force(i)[0].max(0.0);
+        normal += f;
+        let name = m
+            .id_to_name(MjtObjBase::mjOBJ_BODY, other)
+            .unwrap_or_default()
+            .to_string();
+        *per_body.entry(name).or_default() += f;
     }
     let mut text = format!("{phase}: normal force on the object {normal:.2} N\n");
     for (b, f) in &per_body {

@@ -536,12 +536,7 @@ fn assemble(
         type_scores: [0.0; 6],
         attention_point: ctx.p_att,
         attention_normal: ctx.n_att,
-        opposition: Opposition {
-            h1: ctx.grasp.h1_part,
-            h2: ctx.grasp.h2_part,
-            points: [ctx.points[oc1], ctx.points[oc2]],
-            normals: [ctx.normals.get(oc1), ctx.normals.get(oc2)],
-        },
+        opposition: pregrasping_opposition(ctx, oc1, oc2),
         contacts,
         hand_pose,
         pregrasp_pose,
@@ -767,7 +762,6 @@ fn plan_of_final(
             fc.push * 1e3
         ));
     }
-    let stage2 = StageStats { ..stage2 };
     Ok(GraspPlan {
         hand: ctx.hand.name.clone(),
         grasp_type: GraspType::Pinch,
@@ -776,12 +770,7 @@ fn plan_of_final(
         type_scores: [0.0; 6],
         attention_point: ctx.p_att,
         attention_normal: ctx.n_att,
-        opposition: Opposition {
-            h1: ctx.grasp.h1_part,
-            h2: ctx.grasp.h2_part,
-            points: [ctx.points[oc1], ctx.points[oc2]],
-            normals: [ctx.normals.get(oc1), ctx.normals.get(oc2)],
-        },
+        opposition: pregrasping_opposition(ctx, oc1, oc2),
         contacts,
         hand_pose: pose(&fc.hand_pose),
         pregrasp_pose: pose(&pregrasp_iso),
@@ -816,4 +805,14 @@ fn plan_of_final(
         warnings,
         perception: None,
     })
+}
+
+/// The pregrasping opposition (stage 1's result) between cloud points `oc1` and `oc2`.
+fn pregrasping_opposition(ctx: &SearchContext, oc1: usize, oc2: usize) -> Opposition {
+    Opposition {
+        h1: ctx.grasp.h1_part,
+        h2: ctx.grasp.h2_part,
+        points: [ctx.points[oc1], ctx.points[oc2]],
+        normals: [ctx.normals.get(oc1), ctx.normals.get(oc2)],
+    }
 }
