@@ -5,12 +5,11 @@
 //! 1. the object is dropped 1 mm above the table at a seeded random spot (±[`PLACE_RANGE`]) and
 //!    yaw, and settles for 0.3 s while the hand is parked out of view;
 //! 2. the camera renders the scene and graspd plans on the frame (or on the object's cloud);
-//! 3. the base jumps to the pre-grasp pose (`pregrasp_pose × hand_pose⁻¹ × root_pose`) with the
-//!    fingers pre-shaped (each closing actuator at the planned joints opened by the hand's
-//!    `preshape` fraction of its span, every other joint at its planned angle) and holds 0.3 s;
+//! 3. the base jumps to the pre-grasp pose (`pregrasp_pose × hand_pose⁻¹ × root_pose`) with every
+//!    actuator at graspd's `pregrasp_joints` (each servo's equilibrium there) and holds 0.3 s;
 //! 4. approach: the base moves in a straight line to `root_pose` in [`APPROACH_S`];
-//! 5. close: closing actuators ramp in [`CLOSE_S`] from the pre-shape to the planned joints
-//!    plus the hand's squeeze, then 0.4 s settle;
+//! 5. close: every actuator together in [`CLOSE_S`], from the pre-grasp through the touching
+//!    `joints` (two thirds of the time) to `squeeze_joints`, then 0.4 s settle;
 //! 6. lift: the base rises [`LIFT_M`] in [`LIFT_S`]; hold [`HOLD_S`];
 //! 7. shake: [`SHAKE_S`] of a sinusoidal displacement of amplitude [`SHAKE_AMPLITUDE_M`] at
 //!    [`SHAKE_HZ`] along (1, 1, 0.5)/|·| (peak acceleration ≈ 3.2 m/s²), then 0.3 s still.
