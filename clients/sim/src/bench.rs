@@ -42,6 +42,8 @@ pub struct HandSummary {
     pub success_rate: f64,
     pub mean_plan_ms: f64,
     pub outcomes: BTreeMap<&'static str, usize>,
+    /// The squeeze depth graspd was asked for (derived from the model, `hand.rs`), m.
+    pub squeeze_depth: f64,
 }
 
 /// The whole run.
@@ -196,6 +198,7 @@ fn summarise<'a>(hand: &SimHand, recs: impl Iterator<Item = &'a TrialRecord>) ->
         outcomes.insert(o.name(), recs.iter().filter(|r| r.outcome == o).count());
     }
     HandSummary {
+        squeeze_depth: hand.squeeze_depth,
         hand: hand.name.clone(),
         label: hand.label.clone(),
         successes,

@@ -14,7 +14,11 @@
 //!   their own force limits, as a robot's gripper closes "until force"; the saturating error
 //!   computed from gain and force range alone proved too small in MuJoCo, where linkages and
 //!   soft contacts give way (the 2F-85 held 65 % of the Table 5.2 trials at it, 85 % at 5 cm);
-//!   with an unlimited servo, [`UNLIMITED_SQUEEZE_DEPTH`];
+//!   with unlimited servos the depth at which each servo, at its gain (scaled by
+//!   `servo_gain_scale`), pushes [`GRIP_FORCE`] at the far end of the finger it moves
+//!   (`d = F·r² / (kp·gear²)`, r the lever from its joint to the farthest geom it carries), the
+//!   largest over the hand's closing servos, within [[`MIN_SQUEEZE_DEPTH`], [`MAX_SQUEEZE_DEPTH`]];
+//!   a servo that drives a tendon counts at [`MIN_SQUEEZE_DEPTH`];
 //! - **graspd name**: the model's name (`<mujoco model=…>`) made a graspd name.
 
 use crate::SimError;
@@ -34,9 +38,14 @@ const BUILT_IN: [(&str, &str); 4] = [
 /// The largest squeeze depth graspd accepts (`options.squeeze_depth`), m.
 pub const MAX_SQUEEZE_DEPTH: f64 = 0.05;
 
-/// The squeeze depth for a hand with a closing servo that has no force limit, m: nothing bounds
-/// its grip but the depth, so it presses as a grasp benchmark's squeeze does (DexGraspBench).
-pub const UNLIMITED_SQUEEZE_DEPTH: f64 = 0.01;
+/// The smallest squeeze depth derived for a hand with unlimited servos, m (a grasp benchmark's
+/// squeeze, DexGraspBench's order).
+pub const MIN_SQUEEZE_DEPTH: f64 = 0.005;
+
+/// The push an unlimited closing servo is asked for at the far end of its finger, N: twice the
+/// weight of a 1 kg object held between two opposed fingers at friction 1 — what a hand meant
+/// for household objects should squeeze with, whatever its servos' gains.
+pub const GRIP_FORCE: f64 = 10.0;
 
 /// One closing actuator and its command range.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -154,7 +163,7 @@ impl SimHand {
             )));
         }
         let model = hands_dir.join(&toml.model);
-        let derived = derive(&model).map_err(|e| match e {
+        let derived = derive(&model, gain_scale).map_err(|e| match e {
             SimError::Input(m) => bad(m),
             other => other,
         })?;
@@ -190,7 +199,7 @@ struct Derived {
     squeeze_depth: f64,
 }
 
-fn derive(model_path: &Path) -> Result<Derived, SimError> {
+fn derive(model_path: &Path, gain_scale: f64) -> Result<Derived, SimError> {
     let input = |e: String| SimError::Input(format!("{}: {e}", model_path.display()));
     let hand = KinematicHand::from_mjcf_file(model_path).map_err(|e| input(e.to_string()))?;
     let synergy = HandSynergy::derive(&hand).map_err(|e| input(e.to_string()))?;
@@ -224,12 +233,50 @@ fn derive(model_path: &Path) -> Result<Derived, SimError> {
         data.actuator_length().to_vec()
     };
     let (len_open, len_closed) = (lengths(&open), lengths(&closed));
+    // Per joint, the lever to the farthest geom it carries, with the hand open.
+    let lever = {
+        let mut data = mj.make_data();
+        data.forward();
+        let parents = mj.body_parentid();
+        let carries = |joint_body: usize, mut b: usize| loop {
+            if b == joint_body {
+                break true;
+            }
+            if b == 0 {
+                break false;
+            }
+            b = parents[b] as usize;
+        };
+        let (anchor, geom_at) = (data.xanchor().to_vec(), data.geom_xpos().to_vec());
+        let geom_body = mj.geom_bodyid();
+        let jb = mj.jnt_bodyid();
+        move |j: usize| -> f64 {
+            let a = nalgebra::Point3::from(anchor[j]);
+            (0..geom_at.len())
+                .filter(|&g| carries(jb[j] as usize, geom_body[g] as usize))
+                .map(|g| (nalgebra::Point3::from(geom_at[g]) - a).norm())
+                .fold(0.0, f64::max)
+        }
+    };
+    // The MuJoCo joints the synergy flexes (abduction and rotation do not press).
+    let flexion: Vec<usize> = synergy
+        .fingers
+        .iter()
+        .flat_map(|f| f.flexion.iter())
+        .filter_map(|fj| mj.name_to_id(MjtObjBase::mjOBJ_JOINT, &hand.tree.joints[fj.joint].name))
+        .collect();
+    let (trn, trn_id, gear) = (
+        mj.actuator_trntype(),
+        mj.actuator_trnid(),
+        mj.actuator_gear(),
+    );
     let nu = mj.ffi().nu as usize;
     let (gain, bias) = (mj.actuator_gainprm(), mj.actuator_biasprm());
     let ctrl = mj.actuator_ctrlrange();
     let limited = mj.actuator_forcelimited();
     let mut actuators = Vec::new();
     let mut all_limited = true;
+    let mut unlimited_depth: f64 = 0.0;
     for a in 0..nu {
         let dl = len_closed[a] - len_open[a];
         if dl.abs() < 1e-3 {
@@ -259,6 +306,19 @@ fn derive(model_path: &Path) -> Result<Derived, SimError> {
             closed: command(len_closed[a]),
         });
         all_limited &= limited[a];
+        if !limited[a] {
+            // d = F·r² / k: the contact's travel at which the servo's joint stiffness
+            // k = kp·gear² pushes F at lever r.
+            let k = g.abs() * gain_scale * gear[a][0] * gear[a][0];
+            let d = match trn[a] {
+                MjtTrn::mjTRN_JOINT if k > 1e-12 && flexion.contains(&(trn_id[a][0] as usize)) => {
+                    let r = lever(trn_id[a][0] as usize);
+                    GRIP_FORCE * r * r / k
+                }
+                _ => MIN_SQUEEZE_DEPTH,
+            };
+            unlimited_depth = unlimited_depth.max(d);
+        }
     }
     if actuators.is_empty() {
         return Err(input(
@@ -273,7 +333,7 @@ fn derive(model_path: &Path) -> Result<Derived, SimError> {
         squeeze_depth: if all_limited {
             MAX_SQUEEZE_DEPTH
         } else {
-            UNLIMITED_SQUEEZE_DEPTH
+            unlimited_depth.clamp(MIN_SQUEEZE_DEPTH, MAX_SQUEEZE_DEPTH)
         },
     })
 }

@@ -524,6 +524,8 @@ pub fn pre_grasp_and_approach(
         for (name, q) in [("planned", &joints), ("squeeze", &squeeze_joints)] {
             trial.place_base(&root);
             trial.set_hand_joints(q);
+            trial.data.forward();
+            debug_penetration(trial, name);
             debug_snapshot(trial, name);
         }
         trial.data.qpos_mut().copy_from_slice(&saved);
@@ -601,7 +603,7 @@ fn execute(
     }
     trial.run(CLOSE_SETTLE_S, |_, _| {});
     debug_snapshot(trial, "closed");
-    debug_forces(trial, "closed", &closed);
+    debug_forces(trial, "closed", &grasp, &closed);
     let touching = trial.hand_bodies_touching();
     rec.contact_bodies = Some(touching);
     rec.moved_close_mm = Some((trial.object_position() - before_p).norm() * 1e3);
@@ -688,8 +690,9 @@ fn debug_snapshot(trial: &mut Trial, phase: &str) {
 }
 
 /// With GRASPD_SIM_DEBUG_DIR set, appends the hand's normal force on the object, each
-/// actuator's command, position error and force to `forces.txt` (for looking at a grip).
-fn debug_forces(trial: &Trial, phase: &str, target: &[f64]) {
+/// actuator's command at the touch and at the squeeze, position and force to `forces.txt` (for
+/// looking at a grip).
+fn debug_forces(trial: &Trial, phase: &str, touch: &[f64], target: &[f64]) {
     let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") else {
         return;
     };
@@ -717,9 +720,36 @@ fn debug_forces(trial: &Trial, phase: &str, target: &[f64]) {
             .id_to_name(MjtObjBase::mjOBJ_ACTUATOR, a)
             .unwrap_or_default();
         text += &format!(
-            "  {name}: target {:.3} length {:.3} force {:.3}\n",
-            target[a], len[a], force[a]
+            "  {name}: touch {:.3} target {:.3} length {:.3} force {:.3}\n",
+            touch[a], target[a], len[a], force[a]
         );
+    }
+    let path = std::path::Path::new(&dir).join("forces.txt");
+    let old = std::fs::read_to_string(&path).unwrap_or_default();
+    let _ = std::fs::write(path, old + &text);
+}
+
+/// With GRASPD_SIM_DEBUG_DIR set, appends how deep each hand body is in the object at the
+/// current (kinematically posed) state to `forces.txt`: how far the plan's touch and squeeze
+/// are from the true surface.
+fn debug_penetration(trial: &Trial, phase: &str) {
+    let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") else {
+        return;
+    };
+    let m = &trial.scene.model;
+    let mut deepest: std::collections::BTreeMap<String, f64> = Default::default();
+    for (i, other) in trial.hand_contacts_with_object() {
+        let d = -trial.data.contact()[i].dist;
+        let name = m
+            .id_to_name(MjtObjBase::mjOBJ_BODY, other)
+            .unwrap_or_default()
+            .to_string();
+        let e = deepest.entry(name).or_insert(f64::NEG_INFINITY);
+        *e = e.max(d);
+    }
+    let mut text = format!("{phase} (posed): depth in the true object per hand body\n");
+    for (b, d) in &deepest {
+        text += &format!("  {b}: {:.1} mm\n", d * 1e3);
     }
     let path = std::path::Path::new(&dir).join("forces.txt");
     let old = std::fs::read_to_string(&path).unwrap_or_default();

@@ -54,6 +54,41 @@ fn a_scene_builds_and_steps_with_the_object_at_rest_on_the_table() {
     assert_eq!(trial.hand_bodies_touching(), 0);
 }
 
+/// The squeeze depth of a hand with unlimited servos follows their stiffness (hand.rs:
+/// d = F·r²/(kp·gear²)): the Allegro's MCP servos (kp 1, gear 1, scaled by 5) carry a finger of
+/// about 15 cm (5.4 + 3.85 + 2.7 cm links and the 2.7 cm tip in the Menagerie model), so
+/// d ≈ 10 N · 0.15² / 5 ≈ 4.5 cm; twice the gain halves it; servos with force limits (the 2F-85)
+/// press at their limit, graspd's largest depth.
+#[test]
+fn the_squeeze_depth_follows_the_servo_stiffness() {
+    use graspd_sim::hand::{GRIP_FORCE, MAX_SQUEEZE_DEPTH};
+    let Some(data) = testdata() else { return };
+    let dir = std::env::temp_dir().join(format!("graspd-sim-depth-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let with_scale = |scale: f64| {
+        let toml = dir.join(format!("allegro_{scale}.toml"));
+        std::fs::write(
+            &toml,
+            format!(
+                "model = \"{}\"\nservo_gain_scale = {scale}\n",
+                data.join("hands/wonik_allegro/right_hand.xml").display()
+            ),
+        )
+        .unwrap();
+        SimHand::load(toml.to_str().unwrap(), &data.join("hands"))
+            .unwrap()
+            .squeeze_depth
+    };
+    let (d5, d10) = (with_scale(5.0), with_scale(10.0));
+    assert!((0.035..=0.05).contains(&d5), "Allegro at kp 5: {d5} m");
+    assert!((d5 / d10 - 2.0).abs() < 1e-9, "{d5} vs {d10}");
+    let lever = (d5 * 5.0 / GRIP_FORCE).sqrt();
+    assert!((0.13..0.16).contains(&lever), "lever {lever} m");
+    let _ = std::fs::remove_dir_all(&dir);
+    let gripper = SimHand::load("robotiq_2f85", &data.join("hands")).unwrap();
+    assert_eq!(gripper.squeeze_depth, MAX_SQUEEZE_DEPTH);
+}
+
 /// Each shared MJCF hand as derived from its model alone: closing actuators found, and driving
 /// them from their open to their closed commands in MuJoCo (the hand alone, fixed in the world)
 /// brings every fingertip closer to the palm's grasp centre (graspd's `HandSynergy::grasp_centre`,
