@@ -4,6 +4,7 @@
 
 pub mod bench;
 pub mod camera;
+pub mod closing;
 pub mod hand;
 pub mod object;
 pub mod scene;

@@ -43,6 +43,10 @@ struct Cli {
     /// Extra PlanGrasp calls with other seeds when graspd marks a plan infeasible.
     #[arg(long, default_value_t = 2, global = true)]
     replans: usize,
+    /// Close guarded: each actuator stops where what it moves touches the object and squeezes
+    /// from there (default: open loop, the commands as planned).
+    #[arg(long, global = true)]
+    guarded_close: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -184,6 +188,7 @@ fn real_main() -> Result<(), SimError> {
         cloud_input: cli.cloud,
         replans: cli.replans,
         snapshot: None,
+        guarded_close: cli.guarded_close,
     };
     match cli.command {
         Command::Trial { hand, object, seed } => {

@@ -9,7 +9,9 @@
 //!    actuator at graspd's `pregrasp_joints` (each servo's equilibrium there) and holds 0.3 s;
 //! 4. approach: the base moves in a straight line to `root_pose` in [`APPROACH_S`];
 //! 5. close: every actuator together in [`CLOSE_S`], from the pre-grasp through the touching
-//!    `joints` (two thirds of the time) to `squeeze_joints`, then 0.4 s settle;
+//!    `joints` (two thirds of the time) to `squeeze_joints`, then 0.4 s settle — open loop, or
+//!    with `guarded_close` each actuator stops where what it moves touches the object and
+//!    squeezes from there ([`crate::closing`]);
 //! 6. lift: the base rises [`LIFT_M`] in [`LIFT_S`]; hold [`HOLD_S`];
 //! 7. shake: [`SHAKE_S`] of a sinusoidal displacement of amplitude [`SHAKE_AMPLITUDE_M`] at
 //!    [`SHAKE_HZ`] along (1, 1, 0.5)/|·| (peak acceleration ≈ 3.2 m/s²), then 0.3 s still.
@@ -99,6 +101,8 @@ pub struct TrialOptions {
     pub replans: usize,
     /// Render a snapshot with the hand after the hold, from this view.
     pub snapshot: Option<(Intrinsics, Isometry3<f64>)>,
+    /// Close guarded instead of open loop ([`crate::closing`]).
+    pub guarded_close: bool,
 }
 
 /// What one trial did.
@@ -583,25 +587,9 @@ fn execute(
         Ok(a) => a,
         Err(o) => return o,
     };
-    // Close: every actuator together from the pre-grasp through the touching joints (first
-    // two thirds of the time) to the squeeze.
-    let open: Vec<f64> = trial.data.ctrl().to_vec();
+    // Close (crate::closing): open loop unless the options ask for the guarded close.
     let (before_p, before_q) = (trial.object_position(), trial.object_orientation());
-    for (k, phase) in ["closing_1", "closing_2", "closing_3"].iter().enumerate() {
-        trial.run(CLOSE_S / 3.0, |t, f| {
-            let f = (k as f64 + f) / 3.0;
-            let (from, to, g) = if f < 2.0 / 3.0 {
-                (&open, &grasp, f * 1.5)
-            } else {
-                (&grasp, &closed, (f - 2.0 / 3.0) * 3.0)
-            };
-            for (a, c) in t.data.ctrl_mut().iter_mut().enumerate() {
-                *c = from[a] + (to[a] - from[a]) * g;
-            }
-        });
-        debug_snapshot(trial, phase);
-    }
-    trial.run(CLOSE_SETTLE_S, |_, _| {});
+    crate::closing::close(trial, &grasp, &closed, opts.guarded_close);
     debug_snapshot(trial, "closed");
     debug_forces(trial, "closed", &grasp, &closed);
     let touching = trial.hand_bodies_touching();
@@ -660,7 +648,7 @@ fn execute(
 
 /// With GRASPD_SIM_DEBUG_DIR set, saves a picture of each phase there (for looking at a trial):
 /// two close views of the object, from the front left and from the right.
-fn debug_snapshot(trial: &mut Trial, phase: &str) {
+pub(crate) fn debug_snapshot(trial: &mut Trial, phase: &str) {
     if let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") {
         let o = trial.object_position() + Vector3::new(0.0, 0.0, 0.05);
         let mut imgs = Vec::new();

@@ -63,8 +63,7 @@ fn a_scene_builds_and_steps_with_the_object_at_rest_on_the_table() {
 fn the_squeeze_depth_follows_the_servo_stiffness() {
     use graspd_sim::hand::{GRIP_FORCE, MAX_SQUEEZE_DEPTH};
     let Some(data) = testdata() else { return };
-    let dir = std::env::temp_dir().join(format!("graspd-sim-depth-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tempdir();
     let with_scale = |scale: f64| {
         let toml = dir.join(format!("allegro_{scale}.toml"));
         std::fs::write(
@@ -84,7 +83,6 @@ fn the_squeeze_depth_follows_the_servo_stiffness() {
     assert!((d5 / d10 - 2.0).abs() < 1e-9, "{d5} vs {d10}");
     let lever = (d5 * 5.0 / GRIP_FORCE).sqrt();
     assert!((0.13..0.16).contains(&lever), "lever {lever} m");
-    let _ = std::fs::remove_dir_all(&dir);
     let gripper = SimHand::load("robotiq_2f85", &data.join("hands")).unwrap();
     assert_eq!(gripper.squeeze_depth, MAX_SQUEEZE_DEPTH);
 }
@@ -342,6 +340,7 @@ fn trial_options() -> TrialOptions {
         cloud_input: false,
         replans: 0,
         snapshot: None,
+        guarded_close: false,
     }
 }
 

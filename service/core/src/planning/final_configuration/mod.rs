@@ -147,9 +147,20 @@ pub struct FinalConfiguration {
     pub plane_clearance: Option<f64>,
     pub push: f64,
     pub feasible: bool,
+    /// Whether contacts lie on both sides of the opposition (h1's and h2's).
+    pub two_sided: bool,
     pub reason: Option<String>,
     /// Ranking key within feasibility (larger is better).
     pub score: f64,
+}
+
+impl FinalConfiguration {
+    /// The order candidates are ranked in (larger is better): feasible first; among the
+    /// infeasible, those that hold the object from both sides before those that touch one
+    /// (a client executing the best infeasible plan then at least grips); then the score.
+    fn rank(&self) -> (bool, bool, f64) {
+        (self.feasible, self.two_sided, self.score)
+    }
 }
 
 /// The candidates of one request: which fingers take part and how the hand is pre-shaped.
@@ -234,11 +245,7 @@ pub fn search(
             break;
         }
     }
-    judged.sort_by(|x, y| {
-        y.feasible
-            .cmp(&x.feasible)
-            .then(y.score.total_cmp(&x.score))
-    });
+    judged.sort_by(|x, y| y.rank().partial_cmp(&x.rank()).unwrap_or(std::cmp::Ordering::Equal));
     let mut out: Vec<FinalConfiguration> = Vec::new();
     for c in judged {
         let distinct = out.iter().all(|o| {
@@ -288,7 +295,10 @@ fn judge(
         let Some(c) = judge_with(ctx, model, grasp, object, opposition, approach, s0)? else {
             continue;
         };
-        let rank = |c: &FinalConfiguration| (c.feasible, c.contacts.len().min(3), c.score);
+        let rank = |c: &FinalConfiguration| {
+            let (feasible, two_sided, score) = c.rank();
+            (feasible, two_sided, c.contacts.len().min(3), score)
+        };
         if best
             .as_ref()
             .is_none_or(|b| rank(&c).partial_cmp(&rank(b)) == Some(std::cmp::Ordering::Greater))
@@ -551,6 +561,7 @@ fn judge_with(
         plane_clearance,
         push: closed.push,
         feasible: reason.is_none(),
+        two_sided: h1_side && h2_side,
         reason,
         score,
     }))

@@ -1,0 +1,110 @@
+//! Step 5 of the trial protocol, the close: every actuator ramps together from the pre-grasp
+//! commands through the plan's touching commands (the first two thirds of [`CLOSE_S`]) on to its
+//! squeeze commands, then the hand settles for [`CLOSE_SETTLE_S`].
+//!
+//! **Open loop** (the default): the commands as planned, whatever the fingers meet (a grasp
+//! benchmark's replay, DexGraspBench's). **Guarded** (`--guarded-close`), as a hand with contact
+//! or current sensing closes: an actuator stops at the command it has when the bodies it moves
+//! touch the object — every branch it drives, for an actuator that drives several (the 2F-85's
+//! one motor for both jaws) — and from there it takes the plan's squeeze travel (squeeze −
+//! touch). A finger that meets the object early, because the unseen side is nearer than graspd
+//! estimated from one view, then stops pushing before the other fingers arrive; one that meets
+//! it late goes on to its squeeze. Measured on Table 5.2 (5 trials per cell) it changed little:
+//! Robotiq 34 → 34, Barrett 33 → 34, Shadow 18 → 20, Allegro 20 → 19 of 40 — the objects that
+//! fall over are tipped by the squeeze on contacts high on one side, not by early fingers.
+
+use crate::trial::{CLOSE_S, CLOSE_SETTLE_S, Trial, debug_snapshot};
+
+/// Per actuator, the branches of hand bodies it moves: for each top-most body one of its
+/// degrees of freedom belongs to (through its transmission: joint, tendon or gear), that body
+/// and every body below it. Needs `trial.data` forwarded (the transmission moments).
+fn moved_branches(trial: &Trial) -> Vec<Vec<Vec<bool>>> {
+    let m = &trial.scene.model;
+    let d = &trial.data;
+    let (nu, nbody) = (m.ffi().nu as usize, m.ffi().nbody as usize);
+    let (nnz, adr, col, moment) = (
+        d.moment_rownnz(),
+        d.moment_rowadr(),
+        d.moment_colind(),
+        d.actuator_moment(),
+    );
+    let (dof_body, parent) = (m.dof_bodyid(), m.body_parentid());
+    let below = |root: usize, mut b: usize| loop {
+        if b == root {
+            break true;
+        }
+        if b == 0 {
+            break false;
+        }
+        b = parent[b] as usize;
+    };
+    (0..nu)
+        .map(|a| {
+            let start = adr[a] as usize;
+            let mut roots: Vec<usize> = (start..start + nnz[a] as usize)
+                .filter(|&k| moment[k].abs() > 1e-9)
+                .map(|k| dof_body[col[k] as usize] as usize)
+                .collect();
+            roots.sort_unstable();
+            roots.dedup();
+            let tops: Vec<usize> = roots
+                .iter()
+                .copied()
+                .filter(|&r| !roots.iter().any(|&o| o != r && below(o, r)))
+                .collect();
+            tops.iter()
+                .map(|&top| {
+                    (0..nbody)
+                        .map(|b| trial.scene.hand_bodies[b] && below(top, b))
+                        .collect()
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Closes the hand from its current commands to `squeeze` through `touch` (module doc).
+pub fn close(trial: &mut Trial, touch: &[f64], squeeze: &[f64], guarded: bool) {
+    trial.data.forward();
+    let branches = if guarded {
+        moved_branches(trial)
+    } else {
+        Vec::new()
+    };
+    let open: Vec<f64> = trial.data.ctrl().to_vec();
+    let nbody = trial.scene.model.ffi().nbody as usize;
+    let mut stopped: Vec<Option<f64>> = vec![None; open.len()];
+    for (k, phase) in ["closing_1", "closing_2", "closing_3"].iter().enumerate() {
+        trial.run(CLOSE_S / 3.0, |t, f| {
+            let f = (k as f64 + f) / 3.0;
+            if f < 2.0 / 3.0 {
+                if guarded {
+                    let mut touching = vec![false; nbody];
+                    for (_, b) in t.hand_contacts_with_object() {
+                        touching[b] = true;
+                    }
+                    for (a, s) in stopped.iter_mut().enumerate() {
+                        let met = !branches[a].is_empty()
+                            && branches[a]
+                                .iter()
+                                .all(|br| br.iter().zip(&touching).any(|(m, t)| *m && *t));
+                        if s.is_none() && met {
+                            *s = Some(t.data.ctrl()[a]);
+                        }
+                    }
+                }
+                let g = f * 1.5;
+                for (a, c) in t.data.ctrl_mut().iter_mut().enumerate() {
+                    *c = stopped[a].unwrap_or(open[a] + (touch[a] - open[a]) * g);
+                }
+            } else {
+                let g = (f - 2.0 / 3.0) * 3.0;
+                for (a, c) in t.data.ctrl_mut().iter_mut().enumerate() {
+                    *c = stopped[a].unwrap_or(touch[a]) + (squeeze[a] - touch[a]) * g;
+                }
+            }
+        });
+        debug_snapshot(trial, phase);
+    }
+    trial.run(CLOSE_SETTLE_S, |_, _| {});
+}
