@@ -245,7 +245,11 @@ pub fn search(
             break;
         }
     }
-    judged.sort_by(|x, y| y.rank().partial_cmp(&x.rank()).unwrap_or(std::cmp::Ordering::Equal));
+    judged.sort_by(|x, y| {
+        y.rank()
+            .partial_cmp(&x.rank())
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
     let mut out: Vec<FinalConfiguration> = Vec::new();
     for c in judged {
         let distinct = out.iter().all(|o| {
