@@ -252,7 +252,10 @@ fn a_shadow_and_an_allegro_trial_succeed_against_graspd() {
     let rt = tokio::runtime::Runtime::new().unwrap();
     let service =
         Service::connect(&format!("http://{}", server.grpc_addr), rt.handle().clone()).unwrap();
-    for (name, object) in [("shadow", "tomato_soup_can"), ("allegro", "tomato_soup_can")] {
+    for (name, object) in [
+        ("shadow", "tomato_soup_can"),
+        ("allegro", "tomato_soup_can"),
+    ] {
         let hand = SimHand::load(name, &data.join("hands")).unwrap();
         service.ensure_hand(&hand).unwrap();
         let o = SimObject::load(&data.join("objects"), object).unwrap();

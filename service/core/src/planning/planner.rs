@@ -487,15 +487,7 @@ fn assemble(
         });
     }
     let cps: Vec<ContactPoint> = chosen.iter().map(|&i| ctx.contact(i)).collect();
-    let up = ctx.plane.map(|p| p.normal);
-    let rob = super::robustness::robustness(
-        &cps,
-        &ctx.shape.center,
-        ctx.shape.radius,
-        options.friction,
-        0.01,
-        up.as_ref(),
-    );
+    let rob = ctx.robustness(&cps, true);
     let epsilon = ferrari_canny(
         &cps,
         &ctx.shape.center,

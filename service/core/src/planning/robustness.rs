@@ -40,6 +40,31 @@ pub fn robustness(
     patch_radius: f64,
     up: Option<&Vector3<f64>>,
 ) -> Robustness {
+    robustness_above(
+        contacts,
+        centre_of_mass,
+        radius,
+        friction,
+        patch_radius,
+        up,
+        f64::NEG_INFINITY,
+    )
+    .unwrap_or_else(|r| r)
+}
+
+/// [`robustness`], stopped as soon as the weakest axis is known to be at most `floor` (a
+/// search that only wants figures above it spares the remaining programs): `Err` then, with
+/// the axes solved so far (the rest 0) and `weakest` the least of those — at least the true
+/// weakest, and ≤ `floor`.
+pub fn robustness_above(
+    contacts: &[ContactPoint],
+    centre_of_mass: &Point3<f64>,
+    radius: f64,
+    friction: f64,
+    patch_radius: f64,
+    up: Option<&Vector3<f64>>,
+    floor: f64,
+) -> Result<Robustness, Robustness> {
     let dirs = [
         Vector3::x(),
         -Vector3::x(),
@@ -49,10 +74,18 @@ pub fn robustness(
         -Vector3::z(),
     ];
     let mut axes = [0.0; 6];
+    let mut weakest = f64::INFINITY;
     for (a, d) in axes.iter_mut().zip(&dirs) {
         *a = resisted_force(contacts, centre_of_mass, radius, friction, patch_radius, d);
+        weakest = weakest.min(*a);
+        if weakest <= floor {
+            return Err(Robustness {
+                axes,
+                weakest,
+                gravity: weakest,
+            });
+        }
     }
-    let weakest = axes.iter().copied().fold(f64::INFINITY, f64::min);
     let gravity = up
         .and_then(|u| u.try_normalize(1e-9))
         .map(|u| {
@@ -66,11 +99,11 @@ pub fn robustness(
             )
         })
         .unwrap_or(weakest);
-    Robustness {
+    Ok(Robustness {
         axes,
         weakest,
         gravity,
-    }
+    })
 }
 
 /// The largest t such that the contacts balance a force t·`direction` applied at
@@ -141,6 +174,14 @@ pub fn resisted_force(
 mod tests {
     use super::*;
 
+    /// Two antipodal contacts on x, 3 cm either side of the axis, at height z.
+    fn pinch_at(z: f64) -> [ContactPoint; 2] {
+        [
+            contact([-0.03, 0.0, z], [-1.0, 0.0, 0.0]),
+            contact([0.03, 0.0, z], [1.0, 0.0, 0.0]),
+        ]
+    }
+
     fn contact(p: [f64; 3], n: [f64; 3]) -> ContactPoint {
         ContactPoint {
             position: Point3::new(p[0], p[1], p[2]),
@@ -154,10 +195,7 @@ mod tests {
     /// against the direction.
     #[test]
     fn an_antipodal_pinch_through_the_centre_resists_what_friction_allows() {
-        let c = [
-            contact([-0.03, 0.0, 0.0], [-1.0, 0.0, 0.0]),
-            contact([0.03, 0.0, 0.0], [1.0, 0.0, 0.0]),
-        ];
+        let c = pinch_at(0.0);
         let com = Point3::origin();
         let r = robustness(&c, &com, 0.03, 0.6, 0.01, Some(&Vector3::z()));
         assert!((r.axes[0] - 1.0).abs() < 1e-6, "{:?}", r.axes);
@@ -175,17 +213,28 @@ mod tests {
         assert!((r.weakest - r.axes.iter().copied().fold(f64::INFINITY, f64::min)).abs() < 1e-12);
     }
 
+    /// Stopped early: with a floor of 1.5 the first axis (+x, where one contact pushes with its
+    /// full normal force: 1) already falls to it, so only that program runs and the cut says so;
+    /// with a floor below every axis the figure is the whole one.
+    #[test]
+    fn a_floor_stops_the_programs_once_the_weakest_axis_is_below_it() {
+        let c = pinch_at(0.0);
+        let com = Point3::origin();
+        let full = robustness(&c, &com, 0.03, 0.6, 0.01, None);
+        let above = robustness_above(&c, &com, 0.03, 0.6, 0.01, None, 0.5).unwrap();
+        assert_eq!(above, full);
+        let cut = robustness_above(&c, &com, 0.03, 0.6, 0.01, None, 1.5).unwrap_err();
+        assert!((cut.weakest - 1.0).abs() < 1e-6, "{cut:?}");
+        assert_eq!(cut.axes[1..], [0.0; 5]);
+        assert!(cut.weakest >= full.weakest - 1e-12);
+    }
+
     /// The same pinch 5 cm above the centre of mass: a downward force at the centre of mass now
     /// also tilts the object about the contact line, which only the contacts' torsion (μ·r_patch
     /// per unit force) resists, so the resisted weight drops sharply.
     #[test]
     fn a_pinch_far_from_the_centre_of_mass_resists_less() {
-        let at = |z: f64| {
-            [
-                contact([-0.03, 0.0, z], [-1.0, 0.0, 0.0]),
-                contact([0.03, 0.0, z], [1.0, 0.0, 0.0]),
-            ]
-        };
+        let at = pinch_at;
         let com = Point3::origin();
         let centred = resisted_force(&at(0.0), &com, 0.05, 0.6, 0.01, &-Vector3::z());
         let high = resisted_force(&at(0.05), &com, 0.05, 0.6, 0.01, &-Vector3::y());

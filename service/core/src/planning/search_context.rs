@@ -7,6 +7,7 @@ use super::collision::{self, FingerContact, PosedHand};
 use super::hand_pose::{self, HandFrame, finger_frame, palm_frame};
 use super::object_shape::ObjectShape;
 use super::quality::{self, ContactPoint};
+use super::robustness::{Robustness, resisted_force, robustness, robustness_above};
 use super::types::{PlannerOptions, Pose};
 use crate::cloud::{CloudIndex, LazyNormals, Plane};
 use crate::grasp_type::HandPart;
@@ -70,6 +71,9 @@ impl Assessment {
     }
 }
 
+/// Radius of a fingertip's contact patch for the robustness figure's torsion, m.
+pub const PATCH_RADIUS: f64 = 0.01;
+
 impl SearchContext<'_> {
     pub fn contact(&self, i: usize) -> ContactPoint {
         ContactPoint {
@@ -80,6 +84,54 @@ impl SearchContext<'_> {
 
     pub fn palm_opposition(&self) -> bool {
         self.grasp.h1_part == HandPart::Palm
+    }
+
+    /// The robustness figure ([`super::robustness`]) of `contacts` about the object's estimated
+    /// centre of mass; with `gravity`, straight down along the support plane's normal too (else
+    /// `gravity` is the weakest axis).
+    pub fn robustness(&self, contacts: &[ContactPoint], gravity: bool) -> Robustness {
+        let up = self.plane.map(|p| p.normal).filter(|_| gravity);
+        robustness(
+            contacts,
+            &self.shape.center,
+            self.shape.radius,
+            self.options.friction,
+            PATCH_RADIUS,
+            up.as_ref(),
+        )
+    }
+
+    /// The six axes of [`Self::robustness`], stopped once the weakest is known to be at most
+    /// `floor` (`Err`, [`super::robustness::robustness_above`]).
+    pub fn robustness_above(
+        &self,
+        contacts: &[ContactPoint],
+        floor: f64,
+    ) -> Result<Robustness, Robustness> {
+        robustness_above(
+            contacts,
+            &self.shape.center,
+            self.shape.radius,
+            self.options.friction,
+            PATCH_RADIUS,
+            None,
+            floor,
+        )
+    }
+
+    /// The force straight down (along the support plane's normal) that `contacts` resist about
+    /// the estimated centre of mass (`Robustness::gravity`); None without a plane.
+    pub fn gravity_resistance(&self, contacts: &[ContactPoint]) -> Option<f64> {
+        self.plane.map(|pl| {
+            resisted_force(
+                contacts,
+                &self.shape.center,
+                self.shape.radius,
+                self.options.friction,
+                PATCH_RADIUS,
+                &-pl.normal,
+            )
+        })
     }
 
     /// Hand frame, palm height, R, G and Q for contacts split into the h1 and h2 sides, with the

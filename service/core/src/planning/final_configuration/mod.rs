@@ -10,7 +10,7 @@
 //!    links touch; fingers that take no part keep the posture (open, or curled) that let the
 //!    hand go deepest. The contacts are where the links touch; the grasp joints are the
 //!    touching joints.
-//! 3. **Squeeze**: each touching finger closed further so that its contacts move up to
+//! 3. **Squeeze** ([`squeeze`]): each touching finger closed further so that its contacts move up to
 //!    `squeeze_depth` into the object along their normals, none outward and no joint opening
 //!    (a small linear program per finger; linked groups by one path step) — the position
 //!    servos' error becomes the grip force; the pre-grasp joints are the pre-shape.
@@ -26,17 +26,21 @@
 
 pub mod closing_sweep;
 pub mod placement;
+mod pregrasp;
+mod squeeze;
 
 use super::kinematic_model::KinematicModel;
 use super::quality::{self, ContactPoint};
-use super::robustness::{Robustness, robustness};
+use super::robustness::Robustness;
 use super::search_context::{PLANE_TOLERANCE, SearchContext};
 use crate::cloud::{CloudIndex, LazyNormals, Plane};
 use crate::error::FieldError;
 use crate::grasp_type::GraspType;
 use crate::hand::kinematics::PreShape;
-use closing_sweep::{Closed, SweepContact, SweepHand, close_fingers, patch};
+use closing_sweep::{SweepContact, SweepHand, close_fingers, patch};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use pregrasp::{advance_contacts, joints_at};
+use squeeze::squeeze_joints;
 
 /// Largest push of a linked finger into the object while its group closes, m.
 pub const MAX_PUSH: f64 = 0.015;
@@ -152,6 +156,9 @@ pub struct FinalConfiguration {
     pub reason: Option<String>,
     /// Ranking key within feasibility (larger is better).
     pub score: f64,
+    /// Whether the robustness programs stopped early (the candidate could not enter the best
+    /// `want`): `robustness` then holds an upper bound of the weakest axis.
+    cut: bool,
 }
 
 impl FinalConfiguration {
@@ -160,6 +167,60 @@ impl FinalConfiguration {
     /// (a client executing the best infeasible plan then at least grips); then the score.
     fn rank(&self) -> (bool, bool, f64) {
         (self.feasible, self.two_sided, self.score)
+    }
+
+    fn contact_points(&self) -> Vec<ContactPoint> {
+        self.contacts
+            .iter()
+            .map(|c| ContactPoint {
+                position: c.position,
+                normal: c.normal,
+            })
+            .collect()
+    }
+
+    /// The candidate with the six-axis robustness added to its score (module step 4); the
+    /// programs (the search's largest cost) stop once it cannot beat the best `want` so far of
+    /// its kind (`cut`), and do not run for a one-sided candidate or an infeasible one when
+    /// enough are feasible.
+    fn rated(mut self, ctx: &SearchContext, beat: Beat) -> Self {
+        let floor = match (self.feasible, beat.infeasible) {
+            (true, _) => beat.feasible,
+            (false, Some(b)) if self.two_sided => b,
+            _ => return self,
+        };
+        let cps = self.contact_points();
+        self.robustness = match ctx.robustness_above(&cps, floor - self.score) {
+            Ok(r) => r,
+            Err(r) => {
+                self.cut = true;
+                r
+            }
+        };
+        self.score += self.robustness.weakest;
+        tracing::debug!(
+            robustness = self.robustness.weakest,
+            cut = self.cut,
+            score = self.score,
+            "candidate rated"
+        );
+        self
+    }
+
+    /// With its whole robustness figure (the search rates candidates by the six axes alone, so
+    /// those rated lack only the force straight down; the others, or those cut, get it all).
+    fn with_robustness(mut self, ctx: &SearchContext) -> Self {
+        if self.contacts.len() < 2 {
+            return self;
+        }
+        let cps = self.contact_points();
+        if self.cut || self.robustness == Robustness::default() {
+            self.robustness = ctx.robustness(&cps, true);
+            self.cut = false;
+        } else if let Some(g) = ctx.gravity_resistance(&cps) {
+            self.robustness.gravity = g;
+        }
+        self
     }
 }
 
@@ -234,12 +295,32 @@ pub fn search(
     let mut judged: Vec<FinalConfiguration> = Vec::new();
     for (_, rank, approach) in order.iter().take(ctx.options.final_candidates) {
         let (a, b) = oppositions[*rank];
-        if let Some(c) = judge(ctx, model, &grasp, &object, (a, b), approach)? {
+        // The scores a candidate must beat to enter the best `want` found so far: among the
+        // feasible ones, and (while fewer than `want` are feasible) among the two-sided
+        // infeasible ones; None when infeasible ones can no longer be returned.
+        let beat_among = |feasible: bool| {
+            let mut scores: Vec<f64> = judged
+                .iter()
+                .filter(|c| c.feasible == feasible && c.two_sided)
+                .map(|c| c.score)
+                .collect();
+            scores.sort_by(|x, y| y.total_cmp(x));
+            scores
+                .get(want.max(1) - 1)
+                .copied()
+                .unwrap_or(f64::NEG_INFINITY)
+        };
+        let feasible_found = judged.iter().filter(|c| c.feasible).count();
+        let beat = Beat {
+            feasible: beat_among(true),
+            infeasible: (feasible_found < want).then(|| beat_among(false)),
+        };
+        if let Some(c) = judge(ctx, model, &grasp, &object, (a, b), approach, beat)? {
             judged.push(c);
         }
         let good = judged
             .iter()
-            .filter(|c| c.feasible && c.robustness.weakest >= GOOD_ENOUGH)
+            .filter(|c| c.feasible && !c.cut && c.robustness.weakest >= GOOD_ENOUGH)
             .count();
         if good >= want {
             break;
@@ -257,13 +338,20 @@ pub fn search(
                 || o.hand_pose.rotation.angle_to(&c.hand_pose.rotation) > 15f64.to_radians()
         });
         if distinct {
-            out.push(c);
+            out.push(c.with_robustness(ctx));
         }
         if out.len() == want {
             break;
         }
     }
     Ok(out)
+}
+
+/// The scores a candidate's robustness must lift it above to matter (`FinalConfiguration::rated`).
+#[derive(Debug, Clone, Copy)]
+struct Beat {
+    feasible: f64,
+    infeasible: Option<f64>,
 }
 
 /// A candidate this robust (resisted force per unit grip force, weakest direction) ends the
@@ -279,6 +367,7 @@ fn judge(
     object: &ObjectView,
     opposition: (usize, usize),
     approach: &Vector3<f64>,
+    beat: Beat,
 ) -> Result<Option<FinalConfiguration>, FieldError> {
     // Wrap grasps come in open; fingertip grasps open PRESHAPE_MARGINS wider than the
     // opposition, tightest first (beside a low object the fingertips must come down steeply
@@ -299,6 +388,7 @@ fn judge(
         let Some(c) = judge_with(ctx, model, grasp, object, opposition, approach, s0)? else {
             continue;
         };
+        let c = c.rated(ctx, beat);
         let rank = |c: &FinalConfiguration| {
             let (feasible, two_sided, score) = c.rank();
             (feasible, two_sided, c.contacts.len().min(3), score)
@@ -495,15 +585,6 @@ fn judge_with(
     } else {
         0.0
     };
-    let up = ctx.plane.map(|p| p.normal);
-    let rob = robustness(
-        &cps,
-        &ctx.shape.center,
-        ctx.shape.radius,
-        ctx.options.friction,
-        0.01,
-        up.as_ref(),
-    );
     let h1_side = contacts.iter().any(|c| match c.finger {
         Some(f) => pre.h1.contains(&f),
         None => true,
@@ -538,16 +619,15 @@ fn judge_with(
     } else {
         None
     };
+    // The robustness comes after (`rated`): its programs are the search's largest cost.
     let assessment = ctx.assess(&[oc1], &[oc2], ctx.options.stage2_weights);
-    let score = rob.weakest + 0.1 * assessment.q.max(-1.0) - 2.0 * closed.push;
+    let score = 0.1 * assessment.q.max(-1.0) - 2.0 * closed.push;
     tracing::debug!(
         approach = ?[a.x, a.y, a.z],
         t,
         contacts = contacts.len(),
         fingers = ?contacts.iter().map(|c| c.finger).collect::<Vec<_>>(),
         gii,
-        robustness = rob.weakest,
-        gravity = rob.gravity,
         reason = reason.as_deref().unwrap_or("feasible"),
         "candidate"
     );
@@ -561,13 +641,14 @@ fn judge_with(
         squeeze,
         contacts,
         gii,
-        robustness: rob,
+        robustness: Robustness::default(),
         plane_clearance,
         push: closed.push,
         feasible: reason.is_none(),
         two_sided: h1_side && h2_side,
         reason,
         score,
+        cut: false,
     }))
 }
 
@@ -600,245 +681,4 @@ fn palm_contacts(
         }
     }
     Ok(out)
-}
-
-/// Per taking-part finger, its path parameters advanced from the touch so that its contacts move
-/// `travel` along their inward normals (negative: back out); `untouched` for a finger that
-/// touches nothing. Linear in s from the touch (the speed measured over a small step).
-fn advance_contacts(
-    model: &KinematicModel,
-    sweep: &SweepHand,
-    closed: &Closed,
-    contacts: &[SweepContact],
-    travel: f64,
-    untouched: f64,
-) -> Result<Vec<(usize, Vec<f64>)>, FieldError> {
-    let hand = &model.hand;
-    let syn = &model.synergy;
-    let fk0 = hand.tree.forward(&closed.joints)?;
-    let to_root = sweep.root_in_world.inverse();
-    let mut out: Vec<(usize, Vec<f64>)> = Vec::new();
-    const DS: f64 = 0.02;
-    for (f, sv) in &closed.s {
-        let mine: Vec<&SweepContact> = contacts.iter().filter(|c| c.finger == Some(*f)).collect();
-        if mine.is_empty() {
-            out.push((*f, vec![untouched; sv.len()]));
-            continue;
-        }
-        let mut q = closed.joints.clone();
-        for (fj, &v) in syn.fingers[*f].flexion.iter().zip(sv) {
-            q[fj.joint] = fj.open + (v + DS) * (fj.closed - fj.open);
-        }
-        let fk1 = hand.tree.forward(&q)?;
-        let mut speed: f64 = 0.0;
-        for c in mine {
-            let at = to_root * c.position;
-            let local = fk0.body_poses[c.body].inverse() * at;
-            let moved = fk1.body_poses[c.body] * local;
-            let inward = -(to_root.rotation * c.normal);
-            speed = speed.max((moved - at).dot(&inward) / DS);
-        }
-        let ds = if speed > 1e-4 {
-            (travel / speed).clamp(-0.6, 0.6)
-        } else {
-            0.2 * travel.signum()
-        };
-        out.push((*f, sv.iter().map(|x| (x + ds).clamp(0.0, 1.0)).collect()));
-    }
-    Ok(out)
-}
-
-/// The squeeze (module step 3): per touching finger, the flexion steps that press its contacts,
-/// carried with their links, up to `depth` along their inward normals and none outward (a
-/// linear program on the finite-difference Jacobian, re-linearised); each group of linked
-/// fingers takes one path step sized by least squares on its contacts. Taking-part fingers
-/// that touch nothing close fully. Joints stay inside their limits.
-fn squeeze_joints(
-    model: &KinematicModel,
-    sweep: &SweepHand,
-    closed: &Closed,
-    contacts: &[SweepContact],
-    depth: f64,
-) -> Result<Vec<f64>, FieldError> {
-    use microlp::{ComparisonOp, OptimizationDirection, Problem};
-    let hand = &model.hand;
-    let syn = &model.synergy;
-    let to_root = sweep.root_in_world.inverse();
-    let fk0 = hand.tree.forward(&closed.joints)?;
-    // Per contact: its point in its link's frame and its inward normal (root frame).
-    let carried = |c: &SweepContact| {
-        let at = to_root * c.position;
-        (
-            c.body,
-            fk0.body_poses[c.body].inverse() * at,
-            at,
-            -(to_root.rotation * c.normal),
-        )
-    };
-    let mut q = closed.joints.clone();
-    let mut linked: Vec<usize> = Vec::new();
-    const H: f64 = 1e-3;
-    for (f, _) in &closed.s {
-        let fs = &syn.fingers[*f];
-        let mine: Vec<_> = contacts
-            .iter()
-            .filter(|c| c.finger == Some(*f))
-            .map(carried)
-            .collect();
-        if mine.is_empty() {
-            for fj in &fs.flexion {
-                q[fj.joint] = fj.closed;
-            }
-            continue;
-        }
-        if fs.constrained {
-            linked.push(*f);
-            continue;
-        }
-        // Each contact's motion along its inward normal (sliding does not press) is linear in
-        // the finger's flexion steps (finite differences); a small linear program takes the
-        // steps that press most, each contact at most to `depth` and none outward, every joint
-        // only closing and inside its limits — re-linearised a few times for the rotations.
-        for _ in 0..3 {
-            let fk = hand.tree.forward(&q)?;
-            let left: Vec<f64> = mine
-                .iter()
-                .map(|(b, local, at, inward)| depth - (fk.body_poses[*b] * local - at).dot(inward))
-                .collect();
-            if left.iter().all(|&r| r < 2e-4) {
-                break;
-            }
-            let mut lp = Problem::new(OptimizationDirection::Maximize);
-            let mut rows: Vec<Vec<(microlp::Variable, f64)>> = vec![Vec::new(); mine.len()];
-            let mut steps = Vec::new();
-            for fj in &fs.flexion {
-                let dir = (fj.closed - fj.open).signum();
-                let (lo, hi) = hand.tree.joints[fj.joint].limits();
-                let room = if dir > 0.0 {
-                    hi - q[fj.joint]
-                } else {
-                    q[fj.joint] - lo
-                }
-                .max(0.0);
-                let mut qh = q.clone();
-                qh[fj.joint] += dir * H;
-                let fk1 = hand.tree.forward(&qh)?;
-                let along: Vec<f64> = mine
-                    .iter()
-                    .map(|(b, local, _, inward)| {
-                        (fk1.body_poses[*b] * local - fk.body_poses[*b] * local).dot(inward) / H
-                    })
-                    .collect();
-                // Objective: the summed press, less a little motion.
-                let gain: f64 = along.iter().sum::<f64>() - 1e-4;
-                let x = lp.add_var(gain, (0.0, room));
-                for (row, a) in rows.iter_mut().zip(&along) {
-                    row.push((x, *a));
-                }
-                steps.push((fj.joint, dir, x));
-            }
-            for (row, r) in rows.iter().zip(&left) {
-                lp.add_constraint(row.as_slice(), ComparisonOp::Le, r.max(0.0));
-                lp.add_constraint(row.as_slice(), ComparisonOp::Ge, r.min(0.0));
-            }
-            let Ok(Ok(sol)) = lp.solve().map(|o| o.into_solution()) else {
-                break;
-            };
-            for (joint, dir, x) in steps {
-                q[joint] += dir * sol[x];
-            }
-        }
-    }
-    hand.tree.clamp(&mut q);
-    // A linkage: one path parameter per group of linked fingers (a gripper's two jaws, or one
-    // finger whose distal joints are coupled), sized by least squares on the group's contacts'
-    // inward motion.
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    for &f in &linked {
-        let g: Vec<usize> = syn
-            .group_of(f)
-            .iter()
-            .copied()
-            .filter(|g| linked.contains(g))
-            .collect();
-        if !groups.contains(&g) {
-            groups.push(g);
-        }
-    }
-    let s_of = |f: usize| {
-        closed
-            .s
-            .iter()
-            .find(|(g, _)| *g == f)
-            .map(|(_, v)| v.clone())
-    };
-    for group in &groups {
-        let mine: Vec<_> = contacts
-            .iter()
-            .filter(|c| c.finger.is_some_and(|f| group.contains(&f)))
-            .map(carried)
-            .collect();
-        let advanced = |q: &[f64], ds: f64| -> Result<Vec<f64>, FieldError> {
-            let s: Vec<(usize, Vec<f64>)> = group
-                .iter()
-                .filter_map(|&f| s_of(f).map(|v| (f, v.iter().map(|x| x + ds).collect())))
-                .collect();
-            let mut base = q.to_vec();
-            for (f, sv) in &s {
-                for (fj, &v) in syn.fingers[*f].flexion.iter().zip(sv) {
-                    base[fj.joint] = fj.open + v * (fj.closed - fj.open);
-                }
-            }
-            hand.tree.clamp(&mut base);
-            let held: Vec<usize> = s
-                .iter()
-                .flat_map(|(f, _)| syn.fingers[*f].flexion.iter().map(|fj| fj.joint))
-                .collect();
-            hand.tree.project_constraints_holding(&mut base, &held)?;
-            Ok(base)
-        };
-        let qh = advanced(&q, 0.01)?;
-        let fk1 = hand.tree.forward(&qh)?;
-        let (mut num, mut den) = (0.0, 0.0);
-        // Least squares on the motion along each inward normal (sliding does not press):
-        // ds·(v·n) = depth for every contact.
-        for (b, local, at, inward) in &mine {
-            let along = ((fk1.body_poses[*b] * local) - at).dot(inward) / 0.01;
-            num += along * depth;
-            den += along * along;
-        }
-        let ds = if den > 1e-12 {
-            (num / den).clamp(0.0, 0.6)
-        } else {
-            0.2
-        };
-        q = advanced(&q, ds)?;
-    }
-    Ok(q)
-}
-
-/// `closed.joints` with the taking-part fingers at path parameters `s` (projected onto the
-/// model's constraints when linked).
-fn joints_at(
-    model: &KinematicModel,
-    closed: &Closed,
-    s: &[(usize, Vec<f64>)],
-) -> Result<Vec<f64>, FieldError> {
-    let hand = &model.hand;
-    let syn = &model.synergy;
-    let mut q = closed.joints.clone();
-    for (f, sv) in s {
-        for (fj, &v) in syn.fingers[*f].flexion.iter().zip(sv) {
-            q[fj.joint] = fj.open + v * (fj.closed - fj.open);
-        }
-    }
-    hand.tree.clamp(&mut q);
-    if s.iter().any(|(f, _)| syn.fingers[*f].constrained) {
-        let held: Vec<usize> = s
-            .iter()
-            .flat_map(|(f, _)| syn.fingers[*f].flexion.iter().map(|fj| fj.joint))
-            .collect();
-        hand.tree.project_constraints_holding(&mut q, &held)?;
-    }
-    Ok(q)
 }

@@ -1,0 +1,175 @@
+//! Module step 3, the squeeze: the joints that press each touching finger's contacts a few mm
+//! into the object along their normals, so that the position servos' error becomes the grip.
+
+use super::super::kinematic_model::KinematicModel;
+use super::closing_sweep::{Closed, SweepContact, SweepHand};
+use crate::error::FieldError;
+
+/// The squeeze (module step 3): per touching finger, the flexion steps that press its contacts,
+/// carried with their links, up to `depth` along their inward normals and none outward (a
+/// linear program on the finite-difference Jacobian, re-linearised); each group of linked
+/// fingers takes one path step sized by least squares on its contacts. Taking-part fingers
+/// that touch nothing close fully. Joints stay inside their limits.
+pub(super) fn squeeze_joints(
+    model: &KinematicModel,
+    sweep: &SweepHand,
+    closed: &Closed,
+    contacts: &[SweepContact],
+    depth: f64,
+) -> Result<Vec<f64>, FieldError> {
+    use microlp::{ComparisonOp, OptimizationDirection, Problem};
+    let hand = &model.hand;
+    let syn = &model.synergy;
+    let to_root = sweep.root_in_world.inverse();
+    let fk0 = hand.tree.forward(&closed.joints)?;
+    // Per contact: its point in its link's frame and its inward normal (root frame).
+    let carried = |c: &SweepContact| {
+        let at = to_root * c.position;
+        (
+            c.body,
+            fk0.body_poses[c.body].inverse() * at,
+            at,
+            -(to_root.rotation * c.normal),
+        )
+    };
+    let mut q = closed.joints.clone();
+    let mut linked: Vec<usize> = Vec::new();
+    const H: f64 = 1e-3;
+    for (f, _) in &closed.s {
+        let fs = &syn.fingers[*f];
+        let mine: Vec<_> = contacts
+            .iter()
+            .filter(|c| c.finger == Some(*f))
+            .map(carried)
+            .collect();
+        if mine.is_empty() {
+            for fj in &fs.flexion {
+                q[fj.joint] = fj.closed;
+            }
+            continue;
+        }
+        if fs.constrained {
+            linked.push(*f);
+            continue;
+        }
+        // Each contact's motion along its inward normal (sliding does not press) is linear in
+        // the finger's flexion steps (finite differences); a small linear program takes the
+        // steps that press most, each contact at most to `depth` and none outward, every joint
+        // only closing and inside its limits — re-linearised a few times for the rotations.
+        for _ in 0..3 {
+            let fk = hand.tree.forward(&q)?;
+            let left: Vec<f64> = mine
+                .iter()
+                .map(|(b, local, at, inward)| depth - (fk.body_poses[*b] * local - at).dot(inward))
+                .collect();
+            if left.iter().all(|&r| r < 2e-4) {
+                break;
+            }
+            let mut lp = Problem::new(OptimizationDirection::Maximize);
+            let mut rows: Vec<Vec<(microlp::Variable, f64)>> = vec![Vec::new(); mine.len()];
+            let mut steps = Vec::new();
+            for fj in &fs.flexion {
+                let dir = (fj.closed - fj.open).signum();
+                let (lo, hi) = hand.tree.joints[fj.joint].limits();
+                let room = if dir > 0.0 {
+                    hi - q[fj.joint]
+                } else {
+                    q[fj.joint] - lo
+                }
+                .max(0.0);
+                let mut qh = q.clone();
+                qh[fj.joint] += dir * H;
+                let fk1 = hand.tree.forward(&qh)?;
+                let along: Vec<f64> = mine
+                    .iter()
+                    .map(|(b, local, _, inward)| {
+                        (fk1.body_poses[*b] * local - fk.body_poses[*b] * local).dot(inward) / H
+                    })
+                    .collect();
+                // Objective: the summed press, less a little motion.
+                let gain: f64 = along.iter().sum::<f64>() - 1e-4;
+                let x = lp.add_var(gain, (0.0, room));
+                for (row, a) in rows.iter_mut().zip(&along) {
+                    row.push((x, *a));
+                }
+                steps.push((fj.joint, dir, x));
+            }
+            for (row, r) in rows.iter().zip(&left) {
+                lp.add_constraint(row.as_slice(), ComparisonOp::Le, r.max(0.0));
+                lp.add_constraint(row.as_slice(), ComparisonOp::Ge, r.min(0.0));
+            }
+            let Ok(Ok(sol)) = lp.solve().map(|o| o.into_solution()) else {
+                break;
+            };
+            for (joint, dir, x) in steps {
+                q[joint] += dir * sol[x];
+            }
+        }
+    }
+    hand.tree.clamp(&mut q);
+    // A linkage: one path parameter per group of linked fingers (a gripper's two jaws, or one
+    // finger whose distal joints are coupled), sized by least squares on the group's contacts'
+    // inward motion.
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for &f in &linked {
+        let g: Vec<usize> = syn
+            .group_of(f)
+            .iter()
+            .copied()
+            .filter(|g| linked.contains(g))
+            .collect();
+        if !groups.contains(&g) {
+            groups.push(g);
+        }
+    }
+    let s_of = |f: usize| {
+        closed
+            .s
+            .iter()
+            .find(|(g, _)| *g == f)
+            .map(|(_, v)| v.clone())
+    };
+    for group in &groups {
+        let mine: Vec<_> = contacts
+            .iter()
+            .filter(|c| c.finger.is_some_and(|f| group.contains(&f)))
+            .map(carried)
+            .collect();
+        let advanced = |q: &[f64], ds: f64| -> Result<Vec<f64>, FieldError> {
+            let s: Vec<(usize, Vec<f64>)> = group
+                .iter()
+                .filter_map(|&f| s_of(f).map(|v| (f, v.iter().map(|x| x + ds).collect())))
+                .collect();
+            let mut base = q.to_vec();
+            for (f, sv) in &s {
+                for (fj, &v) in syn.fingers[*f].flexion.iter().zip(sv) {
+                    base[fj.joint] = fj.open + v * (fj.closed - fj.open);
+                }
+            }
+            hand.tree.clamp(&mut base);
+            let held: Vec<usize> = s
+                .iter()
+                .flat_map(|(f, _)| syn.fingers[*f].flexion.iter().map(|fj| fj.joint))
+                .collect();
+            hand.tree.project_constraints_holding(&mut base, &held)?;
+            Ok(base)
+        };
+        let qh = advanced(&q, 0.01)?;
+        let fk1 = hand.tree.forward(&qh)?;
+        let (mut num, mut den) = (0.0, 0.0);
+        // Least squares on the motion along each inward normal (sliding does not press):
+        // ds·(v·n) = depth for every contact.
+        for (b, local, at, inward) in &mine {
+            let along = ((fk1.body_poses[*b] * local) - at).dot(inward) / 0.01;
+            num += along * depth;
+            den += along * along;
+        }
+        let ds = if den > 1e-12 {
+            (num / den).clamp(0.0, 0.6)
+        } else {
+            0.2
+        };
+        q = advanced(&q, ds)?;
+    }
+    Ok(q)
+}
