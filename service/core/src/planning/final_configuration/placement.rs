@@ -126,21 +126,27 @@ pub fn move_in(
     let root = pose * (fk.body_poses[hand.palm] * hand.hand_frame()).inverse();
     let posed = collision.posed_fk(&fk, &root);
     let clear = |t: f64| clear_at(&posed, &(approach * t), object, CLEARANCE);
-    let mut t = -back;
-    if !clear(t) {
-        if tracing::enabled!(tracing::Level::TRACE) {
-            let off = approach * t;
-            for k in 0..posed.len() {
-                let (c, r) = posed.sphere(k);
-                let table = object
-                    .plane
-                    .map(|pl| posed.piece_plane_clearance(k, pl) + off.dot(&pl.normal));
-                let obj = posed.any_within(k, &object.points, &object.index, CLEARANCE, &off);
-                if obj || table.is_some_and(|x| x < 0.0) {
-                    tracing::trace!(body = %hand.tree.bodies[posed.body_of(k)].name, obj, ?table, ?c, r, "pre-grasp collision");
-                }
+    // At trace level: which bodies meet the object or the table at offset t, and why it matters
+    // (the hand cannot start, or this is where the move in stops).
+    let report = |t: f64, why: &str| {
+        if !tracing::enabled!(tracing::Level::TRACE) {
+            return;
+        }
+        let off = approach * t;
+        for k in 0..posed.len() {
+            let (c, r) = posed.sphere(k);
+            let table = object
+                .plane
+                .map(|pl| posed.piece_plane_clearance(k, pl) + off.dot(&pl.normal));
+            let obj = posed.any_within(k, &object.points, &object.index, CLEARANCE, &off);
+            if obj || table.is_some_and(|x| x < 0.0) {
+                tracing::trace!(why, t, body = %hand.tree.bodies[posed.body_of(k)].name, obj, ?table, ?c, r, "hand meets");
             }
         }
+    };
+    let mut t = -back;
+    if !clear(t) {
+        report(t, "collides at the pre-grasp");
         return Ok(None);
     }
     while t < depth {
@@ -151,6 +157,7 @@ pub fn move_in(
                 let mid = 0.5 * (lo + hi);
                 if clear(mid) { lo = mid } else { hi = mid }
             }
+            report(hi, "the move in stops");
             return Ok(Some(lo));
         }
         t = next;
