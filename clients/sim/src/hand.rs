@@ -17,8 +17,9 @@
 //!   with unlimited servos the depth at which each servo, at its gain (scaled by
 //!   `servo_gain_scale`), pushes [`GRIP_FORCE`] at the far end of the finger it moves
 //!   (`d = F·r² / (kp·gear²)`, r the lever from its joint to the farthest geom it carries), the
-//!   largest over the hand's closing servos, within [[`MIN_SQUEEZE_DEPTH`], [`MAX_SQUEEZE_DEPTH`]];
-//!   a servo that drives a tendon counts at [`MIN_SQUEEZE_DEPTH`];
+//!   largest over the hand's closing servos that flex a synergy flexion joint, within
+//!   [[`MIN_SQUEEZE_DEPTH`], [`MAX_SQUEEZE_DEPTH`]]; any other unlimited servo (a tendon, an
+//!   abduction) counts at [`MIN_SQUEEZE_DEPTH`];
 //! - **graspd name**: the model's name (`<mujoco model=…>`) made a graspd name.
 
 use crate::SimError;
@@ -233,7 +234,8 @@ fn derive(model_path: &Path, gain_scale: f64) -> Result<Derived, SimError> {
         data.actuator_length().to_vec()
     };
     let (len_open, len_closed) = (lengths(&open), lengths(&closed));
-    // Per joint, the lever to the farthest geom it carries, with the hand open.
+    // Per joint, the lever to the farthest geom origin it carries, in the model's reference pose
+    // (qpos0).
     let lever = {
         let mut data = mj.make_data();
         data.forward();
