@@ -5,6 +5,7 @@ pub mod collision;
 pub mod dual_stage;
 pub mod ferrari_canny;
 pub mod final_configuration;
+pub mod grip_forces;
 pub mod hand_pose;
 pub mod kinematic_model;
 pub mod object_shape;

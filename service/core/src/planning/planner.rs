@@ -16,7 +16,7 @@ use crate::cloud::{
 };
 use crate::error::{FieldError, PlanError};
 use crate::grasp_type::{GraspType, HandPart};
-use crate::hand::{HandDescription, PALM};
+use crate::hand::{HandDescription, PALM, ResolvedGrasp};
 use nalgebra::{Point3, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -229,6 +229,54 @@ fn argmax_type(p: &[f64; 6], among: &[GraspType]) -> GraspType {
         .unwrap_or(GraspType::Pinch)
 }
 
+/// A hand with kinematics stops trying other grasp types once the best plan of one is
+/// feasible and resists this much (robustness, per unit grip force per contact).
+const FIRM_ROBUSTNESS: f64 = 0.5;
+/// Most grasp types tried for one request.
+const MAX_TYPES: usize = 3;
+
+/// One grasp type's search (kinematic hands).
+struct TypeAttempt {
+    grasp: ResolvedGrasp,
+    oppositions: Vec<(usize, usize)>,
+    finals: Vec<FinalConfiguration>,
+    stats: (StageStats, StageStats, bool, Option<String>),
+    started: Instant,
+}
+
+/// The grasp types a kinematic hand tries (at most [`MAX_TYPES`]): the detected one, then the
+/// others it realises, most probable first (`scores`, the detector's P(s|O), or the
+/// dissertation's order when they tie), skipping those that resolve to the same fingers and
+/// family as one already listed.
+fn plausible_types(
+    hand: &HandDescription,
+    detected: &ResolvedGrasp,
+    scores: &[f64; 6],
+) -> Vec<ResolvedGrasp> {
+    let family = |g: &ResolvedGrasp| {
+        (
+            g.h1_fingers.clone(),
+            g.h2_fingers.clone(),
+            g.h1_part,
+            g.grasp_type.is_power(),
+        )
+    };
+    let mut order = hand.realisable_types();
+    order.sort_by(|a, b| scores[b.index()].total_cmp(&scores[a.index()]));
+    let mut out = vec![detected.clone()];
+    for t in order {
+        if out.len() >= MAX_TYPES {
+            break;
+        }
+        if let Some(g) = hand.resolve_forced(t)
+            && !out.iter().any(|o| family(o) == family(&g))
+        {
+            out.push(g);
+        }
+    }
+    out
+}
+
 /// Plans a grasp (Algorithm 4). Deterministic for a given input and seed.
 pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
     let t_start = Instant::now();
@@ -309,12 +357,6 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
     } else {
         hand.resolve_detected(requested)
     };
-    if grasp.grasp_type != requested {
-        warnings.push(format!(
-            "{requested} mapped to {} for hand '{}'",
-            grasp.grasp_type, hand.name
-        ));
-    }
     let rule_approach = type_rule::approach_by_rule(
         &shape,
         grasp.grasp_type,
@@ -346,12 +388,22 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
     }
     let t_type = t.elapsed().as_secs_f64();
 
-    let mut approach_prefs = vec![-n_att, rule_approach];
-    if let Some(u) = up {
-        approach_prefs.push(-u);
-    }
-    approach_prefs.push(-Vector3::z());
-    let ctx = SearchContext {
+    let approach_prefs = |g: &ResolvedGrasp| {
+        let rule = type_rule::approach_by_rule(
+            &shape,
+            g.grasp_type,
+            points,
+            up.as_ref(),
+            hints.viewpoint.as_ref(),
+        );
+        let mut prefs = vec![-n_att, rule];
+        if let Some(u) = up {
+            prefs.push(-u);
+        }
+        prefs.push(-Vector3::z());
+        prefs
+    };
+    let base = SearchContext {
         points,
         normals: &normals,
         index: &index,
@@ -360,21 +412,22 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         grasp: &grasp,
         p_att,
         n_att,
-        approach_prefs,
         plane: scene.plane,
         options: &options,
         cos_friction: options.friction.atan().cos(),
         // A hand with kinematics is placed, closed and checked by the final-configuration
         // search; its stage 1 does not pose the parametric hand.
         collision_checks: options.check_collisions && kinematics.is_none(),
+        approach_prefs: approach_prefs(&grasp),
     };
-    let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
     let no_contacts = || FieldError::new("cloud", "no candidate contacts near the attention point");
-    let (mut plan, t) = match kinematics.as_deref() {
+    let (mut plan, t, grasp) = match kinematics.as_deref() {
         None => {
-            let outcome = dual_stage::search(&ctx, &mut rng).ok_or_else(no_contacts)?;
+            let ctx = &base;
+            let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+            let outcome = dual_stage::search(ctx, &mut rng).ok_or_else(no_contacts)?;
             let t = Instant::now();
-            let mut plan = assemble(&ctx, &outcome, &outcome.contacts, &scene, &options)?;
+            let mut plan = assemble(ctx, &outcome, &outcome.contacts, &scene, &options)?;
             plan.candidates = std::iter::once(&outcome.contacts)
                 .chain(&outcome.alternatives)
                 .take(options.candidates)
@@ -382,41 +435,90 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
                     if c == &outcome.contacts {
                         Ok(GraspCandidate::of(&plan))
                     } else {
-                        assemble(&ctx, &outcome, c, &scene, &options)
-                            .map(|p| GraspCandidate::of(&p))
+                        assemble(ctx, &outcome, c, &scene, &options).map(|p| GraspCandidate::of(&p))
                     }
                 })
                 .collect::<Result<_, PlanError>>()?;
-            (plan, t)
+            (plan, t, grasp.clone())
         }
         Some(model) => {
-            let (oppositions, ok, s1, reason) = dual_stage::opposition_stage(&ctx, &mut rng);
-            if oppositions.is_empty() {
-                return Err(no_contacts().into());
-            }
-            let t = Instant::now();
-            let finals =
-                final_configuration::search(&ctx, model, &oppositions, options.candidates)?;
-            let s2 = StageStats {
-                solution_space: finals.len() as f64,
-                candidates: finals.len(),
-                iterations: finals.len(),
-                evaluations: finals.len(),
-                feasible_found: finals.iter().any(|f| f.feasible),
-                seconds: t.elapsed().as_secs_f64(),
-                ..Default::default()
+            // The detected type first, then (unless the caller forced one) the other types the
+            // hand realises, most probable first, while none of them gives a firm grasp
+            // (`plausible_types`): the hand's own plans decide between them.
+            let types = if type_source == TypeSource::Request {
+                vec![grasp.clone()]
+            } else {
+                plausible_types(&hand, &grasp, &type_scores)
             };
+            let mut tried: Vec<TypeAttempt> = Vec::new();
+            for g in types {
+                let ctx = base.for_grasp(&g, approach_prefs(&g));
+                let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+                let (oppositions, ok, s1, reason) = dual_stage::opposition_stage(&ctx, &mut rng);
+                if oppositions.is_empty() {
+                    continue;
+                }
+                let t = Instant::now();
+                let finals =
+                    final_configuration::search(&ctx, model, &oppositions, options.candidates)?;
+                let s2 = StageStats {
+                    solution_space: finals.len() as f64,
+                    candidates: finals.len(),
+                    iterations: finals.len(),
+                    evaluations: finals.len(),
+                    feasible_found: finals.iter().any(|f| f.feasible),
+                    seconds: t.elapsed().as_secs_f64(),
+                    ..Default::default()
+                };
+                let firm = finals
+                    .first()
+                    .is_some_and(|f| f.feasible && f.robustness.weakest >= FIRM_ROBUSTNESS);
+                tried.push(TypeAttempt {
+                    grasp: g,
+                    oppositions,
+                    finals,
+                    stats: (s1, s2, ok, reason),
+                    started: t,
+                });
+                if firm {
+                    break;
+                }
+            }
+            let Some(best) = (0..tried.len()).max_by(|&a, &b| {
+                let key = |k: usize| {
+                    let f = tried[k].finals.first();
+                    (
+                        f.is_some_and(|f| f.feasible),
+                        f.map_or(f64::NEG_INFINITY, |f| f.robustness.weakest),
+                        // Ties (no final at all): the earlier, more probable type.
+                        -(k as f64),
+                    )
+                };
+                key(a)
+                    .partial_cmp(&key(b))
+                    .unwrap_or(std::cmp::Ordering::Equal)
+            }) else {
+                return Err(no_contacts().into());
+            };
+            let chosen = tried.swap_remove(best);
+            let ctx = base.for_grasp(&chosen.grasp, approach_prefs(&chosen.grasp));
             let plan = final_plan(
                 &ctx,
-                &finals,
+                &chosen.finals,
                 &scene,
                 model,
-                (s1, s2, ok, reason),
-                &oppositions,
+                chosen.stats,
+                &chosen.oppositions,
             )?;
-            (plan, t)
+            (plan, chosen.started, chosen.grasp)
         }
     };
+    if grasp.grasp_type != requested {
+        warnings.push(format!(
+            "{requested} mapped to {} for hand '{}'",
+            grasp.grasp_type, hand.name
+        ));
+    }
     plan.grasp_type = grasp.grasp_type;
     plan.requested_type = requested;
     plan.type_source = type_source;

@@ -43,6 +43,35 @@ pub struct SearchContext<'a> {
     pub collision_checks: bool,
 }
 
+impl<'a> SearchContext<'a> {
+    /// The same request planned for another grasp type (`grasp`, with its approach
+    /// preferences).
+    pub fn for_grasp<'b>(
+        &'b self,
+        grasp: &'b ResolvedGrasp,
+        approach_prefs: Vec<Vector3<f64>>,
+    ) -> SearchContext<'b>
+    where
+        'a: 'b,
+    {
+        SearchContext {
+            points: self.points,
+            normals: self.normals,
+            index: self.index,
+            shape: self.shape,
+            hand: self.hand,
+            grasp,
+            p_att: self.p_att,
+            n_att: self.n_att,
+            approach_prefs,
+            plane: self.plane,
+            options: self.options,
+            cos_friction: self.cos_friction,
+            collision_checks: self.collision_checks,
+        }
+    }
+}
+
 /// A contact set assessed against the hand and Eq 5.2 (S and collision aside).
 #[derive(Debug, Clone)]
 pub struct Assessment {

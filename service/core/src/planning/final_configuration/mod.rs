@@ -35,7 +35,6 @@ use super::robustness::Robustness;
 use super::search_context::{PLANE_TOLERANCE, SearchContext};
 use crate::cloud::{CloudIndex, LazyNormals, Plane};
 use crate::error::FieldError;
-use crate::grasp_type::GraspType;
 use crate::hand::kinematics::PreShape;
 use closing_sweep::{SweepContact, SweepHand, close_fingers, patch};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -198,6 +197,16 @@ impl FinalConfiguration {
             }
         };
         self.score += self.robustness.weakest;
+        // Force closure (module step 4): contacts that cannot resist some direction at the
+        // centre of mass do not hold the object, whatever S says.
+        if self.feasible && self.robustness.weakest < MIN_ROBUSTNESS {
+            self.feasible = false;
+            self.reason = Some(format!(
+                "the contacts resist {:.2} of one contact's grip at the centre of mass in their \
+                 weakest direction (< {MIN_ROBUSTNESS}: not force closure)",
+                self.robustness.weakest
+            ));
+        }
         tracing::debug!(
             robustness = self.robustness.weakest,
             cut = self.cut,
@@ -255,10 +264,7 @@ pub fn search(
     let taking_part: Vec<usize> = h1.iter().chain(&h2).copied().collect();
     let grasp = Grasp {
         pre,
-        wrap: matches!(
-            ctx.grasp.grasp_type,
-            GraspType::LargeWrap | GraspType::SmallWrap | GraspType::Power
-        ),
+        wrap: ctx.grasp.grasp_type.is_power(),
         free: (0..model.hand.fingers.len())
             .filter(|f| !taking_part.contains(f))
             .collect(),
@@ -353,6 +359,10 @@ struct Beat {
     feasible: f64,
     infeasible: Option<f64>,
 }
+
+/// Feasible candidates resist at least this force at the centre of mass in every direction,
+/// per unit grip force per contact (force closure with a margin).
+pub const MIN_ROBUSTNESS: f64 = 0.05;
 
 /// A candidate this robust (resisted force per unit grip force, weakest direction) ends the
 /// search early once enough of them are found.
@@ -536,7 +546,19 @@ fn judge_with(
     };
     let mut contacts = closed.contacts.clone();
     contacts.extend(palm_contacts(model, &sweep, &closed.joints, object)?);
-    let squeeze = squeeze_joints(model, &sweep, &closed, &contacts, ctx.options.squeeze_depth)?;
+    let frame = squeeze::GripFrame {
+        centre_of_mass: ctx.shape.center,
+        radius: ctx.shape.radius,
+        friction: ctx.options.friction,
+    };
+    let squeeze = squeeze_joints(
+        model,
+        &sweep,
+        &closed,
+        &contacts,
+        ctx.options.squeeze_depth,
+        &frame,
+    )?;
     // The pre-grasp opening: every finger backed off its touch by the same travel, so that
     // all arrive together — the tightest of PREGRASP_TRAVELS with which the hand so shaped
     // still comes in clear (else the pre-shape it came in with).

@@ -1,25 +1,48 @@
 //! Module step 3, the squeeze: the joints that press each touching finger's contacts a few mm
 //! into the object along their normals, so that the position servos' error becomes the grip.
+//!
+//! The grip is balanced first ([`super::super::grip_forces`]): the contact forces that press
+//! with every touching finger and cancel about the estimated centre of mass. With servos of
+//! equal stiffness k a finger stopped at its touch presses with the joint torques k·Δq, so the
+//! squeeze that presses with forces f_i is Δq = Jᵀf/k (the Jacobian-transpose map of each
+//! finger's contacts); all fingers share one scale, chosen so that the deepest contact is
+//! pressed `depth` along its normal. When the contacts cannot balance (all on one side), each
+//! finger is pressed on its own as deep as `depth` allows (a small linear program).
 
+use super::super::grip_forces::{GripContact, balanced_grip};
 use super::super::kinematic_model::KinematicModel;
 use super::closing_sweep::{Closed, SweepContact, SweepHand};
 use crate::error::FieldError;
+use nalgebra::{Point3, Vector3};
 
-/// The squeeze (module step 3): per touching finger, the flexion steps that press its contacts,
-/// carried with their links, up to `depth` along their inward normals and none outward (a
-/// linear program on the finite-difference Jacobian, re-linearised); each group of linked
-/// fingers takes one path step sized by least squares on its contacts. Taking-part fingers
-/// that touch nothing close fully. Joints stay inside their limits.
+/// What the squeeze balances the grip about: the object's estimated centre of mass (world),
+/// its radius and the friction coefficient.
+pub(super) struct GripFrame {
+    pub centre_of_mass: Point3<f64>,
+    pub radius: f64,
+    pub friction: f64,
+}
+
+/// The squeeze (module step 3): balanced when the contacts allow (module doc); otherwise per
+/// touching finger the flexion steps that press its contacts, carried with their links, up to
+/// `depth` along their inward normals and none outward (a linear program on the
+/// finite-difference Jacobian, re-linearised); each group of linked fingers takes one path step
+/// sized by least squares on its contacts. Taking-part fingers that touch nothing close fully.
+/// Joints stay inside their limits.
 pub(super) fn squeeze_joints(
     model: &KinematicModel,
     sweep: &SweepHand,
     closed: &Closed,
     contacts: &[SweepContact],
     depth: f64,
+    frame: &GripFrame,
 ) -> Result<Vec<f64>, FieldError> {
     use microlp::{ComparisonOp, OptimizationDirection, Problem};
     let hand = &model.hand;
     let syn = &model.synergy;
+    if let Some(q) = balanced_squeeze(model, sweep, closed, contacts, depth, frame)? {
+        return Ok(q);
+    }
     let to_root = sweep.root_in_world.inverse();
     let fk0 = hand.tree.forward(&closed.joints)?;
     // Per contact: its point in its link's frame and its inward normal (root frame).
@@ -172,4 +195,114 @@ pub(super) fn squeeze_joints(
         q = advanced(&q, ds)?;
     }
     Ok(q)
+}
+
+/// A contact presses through its finger when the finger's flexion joints move it along its
+/// inward normal at least this much per radian (m/rad, a 1 cm lever); one they do not move
+/// (a knuckle's link beside the palm) only pushes back, like the palm.
+const MIN_LEVER: f64 = 0.01;
+
+/// The balanced squeeze (module doc): None when the contacts cannot balance, or a finger of a
+/// linkage touches (its group is pressed by one path step instead).
+fn balanced_squeeze(
+    model: &KinematicModel,
+    sweep: &SweepHand,
+    closed: &Closed,
+    contacts: &[SweepContact],
+    depth: f64,
+    frame: &GripFrame,
+) -> Result<Option<Vec<f64>>, FieldError> {
+    let hand = &model.hand;
+    let syn = &model.synergy;
+    if contacts
+        .iter()
+        .any(|c| c.finger.is_some_and(|f| syn.fingers[f].constrained))
+    {
+        return Ok(None);
+    }
+    let to_root = sweep.root_in_world.inverse();
+    let inward: Vec<Vector3<f64>> = contacts
+        .iter()
+        .map(|c| to_root.rotation * -c.normal)
+        .collect();
+    let q0 = &closed.joints;
+    let fk0 = hand.tree.forward(q0)?;
+    const H: f64 = 1e-4;
+    // Per flexion joint of a taking-part finger: how each of its contacts moves per radian
+    // (root frame), from finite differences.
+    let mut moves: Vec<(usize, Vec<(usize, Vector3<f64>)>)> = Vec::new();
+    let mut lever = vec![0.0; contacts.len()];
+    for (f, _) in &closed.s {
+        let mine: Vec<usize> = (0..contacts.len())
+            .filter(|&i| contacts[i].finger == Some(*f))
+            .collect();
+        if mine.is_empty() {
+            continue;
+        }
+        for fj in &syn.fingers[*f].flexion {
+            let mut qh = q0.clone();
+            qh[fj.joint] += H;
+            let fk1 = hand.tree.forward(&qh)?;
+            let v: Vec<(usize, Vector3<f64>)> = mine
+                .iter()
+                .map(|&i| {
+                    let c = &contacts[i];
+                    let local = fk0.body_poses[c.body].inverse() * (to_root * c.position);
+                    let d = fk1.body_poses[c.body] * local - fk0.body_poses[c.body] * local;
+                    (i, d / H)
+                })
+                .collect();
+            for (i, d) in &v {
+                lever[*i] += d.dot(&inward[*i]).powi(2);
+            }
+            moves.push((fj.joint, v));
+        }
+    }
+    let grip: Vec<GripContact> = contacts
+        .iter()
+        .enumerate()
+        .map(|(i, c)| GripContact {
+            position: c.position,
+            inward: -c.normal,
+            group: c.finger.filter(|_| lever[i].sqrt() >= MIN_LEVER),
+        })
+        .collect();
+    let Some(forces) = balanced_grip(&grip, &frame.centre_of_mass, frame.radius, frame.friction)
+    else {
+        return Ok(None);
+    };
+    // τ_j = Σ_i (∂p_i/∂q_j)·f_i over the pressing contacts (forces in the root frame), and how
+    // deep each contact goes per unit of the common scale (linearised).
+    let mut press = vec![0.0; contacts.len()];
+    let mut steps: Vec<(usize, f64)> = Vec::with_capacity(moves.len());
+    for (joint, v) in &moves {
+        let tau: f64 = v
+            .iter()
+            .filter(|(i, _)| grip[*i].group.is_some())
+            .map(|(i, d)| d.dot(&(to_root.rotation * forces[*i])))
+            .sum();
+        for (i, d) in v {
+            press[*i] += tau * d.dot(&inward[*i]);
+        }
+        steps.push((*joint, tau));
+    }
+    let deepest = press.iter().copied().fold(0.0, f64::max);
+    if deepest < 1e-9 {
+        return Ok(None);
+    }
+    let scale = depth / deepest;
+    let mut q = q0.clone();
+    for (joint, tau) in steps {
+        q[joint] += scale * tau;
+    }
+    // Taking-part fingers that touch nothing close fully, as in the unbalanced squeeze.
+    for (f, _) in &closed.s {
+        if !contacts.iter().any(|c| c.finger == Some(*f)) {
+            for fj in &syn.fingers[*f].flexion {
+                q[fj.joint] = fj.closed;
+            }
+        }
+    }
+    hand.tree.clamp(&mut q);
+    Ok(Some(q))
 }
