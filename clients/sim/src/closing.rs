@@ -2,16 +2,17 @@
 //! commands through the plan's touching commands (the first two thirds of [`CLOSE_S`]) on to its
 //! squeeze commands, then the hand settles for [`CLOSE_SETTLE_S`].
 //!
-//! **Open loop** (the default): the commands as planned, whatever the fingers meet (a grasp
-//! benchmark's replay, DexGraspBench's). **Guarded** (`--guarded-close`), as a hand with contact
-//! or current sensing closes: an actuator stops at the command it has when the bodies it moves
-//! touch the object — every branch it drives, for an actuator that drives several (the 2F-85's
-//! one motor for both jaws) — and from there it takes the plan's squeeze travel (squeeze −
-//! touch). A finger that meets the object early, because the unseen side is nearer than graspd
-//! estimated from one view, then stops pushing before the other fingers arrive; one that meets
-//! it late goes on to its squeeze. Measured on Table 5.2 (5 trials per cell) it changed little:
-//! Robotiq 34 → 34, Barrett 33 → 34, Shadow 18 → 20, Allegro 20 → 19 of 40 — the objects that
-//! fall over are tipped by the squeeze on contacts high on one side, not by early fingers.
+//! **Guarded** (the default), as a hand with contact or current sensing closes: an actuator
+//! stops at the command it has when the bodies it moves touch the object — every branch it
+//! drives, for an actuator that drives several (the 2F-85's one motor for both jaws) — and from
+//! there it takes the plan's squeeze travel (squeeze − touch). A finger that meets the object
+//! early, because the unseen side is nearer than graspd estimated from one view, then stops
+//! pushing before the other fingers arrive; one that meets it late goes on to its squeeze, and
+//! graspd's balanced squeeze (each finger's share of a grip that cancels on the object) is
+//! pressed from where the fingers really touch. **Open loop** (`--open-loop`): the commands as
+//! planned, whatever the fingers meet (a grasp benchmark's replay, DexGraspBench's). Measured on
+//! Table 5.2 (10 trials per cell, 2026-12-02, balanced squeeze), open loop → guarded: Robotiq
+//! 68 → 68, Barrett 65 → 65, Shadow 39 → 45, Allegro 56 → 55 of 80.
 
 use crate::trial::{CLOSE_S, CLOSE_SETTLE_S, Trial, debug_snapshot};
 

@@ -43,10 +43,18 @@ struct Cli {
     /// Extra PlanGrasp calls with other seeds when graspd marks a plan infeasible.
     #[arg(long, default_value_t = 2, global = true)]
     replans: usize,
-    /// Close guarded: each actuator stops where what it moves touches the object and squeezes
-    /// from there (default: open loop, the commands as planned).
+    /// Close open loop, the commands as planned (default: guarded — each actuator stops where
+    /// what it moves touches the object and squeezes from there).
     #[arg(long, global = true)]
-    guarded_close: bool,
+    open_loop: bool,
+    /// Execute the plan ranked this far down graspd's candidates (0: the best), as a robot
+    /// stack falling back would.
+    #[arg(long, default_value_t = 0, global = true)]
+    candidate: usize,
+    /// Force a grasp type (large_wrap, small_wrap, power, pinch, precision, tripod) instead of
+    /// graspd's detection.
+    #[arg(long, global = true, value_parser = parse_grasp_type)]
+    grasp_type: Option<graspd_proto::v1::GraspType>,
     #[command(subcommand)]
     command: Command,
 }
@@ -188,7 +196,9 @@ fn real_main() -> Result<(), SimError> {
         cloud_input: cli.cloud,
         replans: cli.replans,
         snapshot: None,
-        guarded_close: cli.guarded_close,
+        guarded_close: !cli.open_loop,
+        candidate: cli.candidate,
+        grasp_type: cli.grasp_type,
     };
     match cli.command {
         Command::Trial { hand, object, seed } => {
@@ -261,4 +271,15 @@ fn real_main() -> Result<(), SimError> {
         }
     }
     Ok(())
+}
+
+/// A grasp type by its name (`large_wrap` … `tripod`).
+fn parse_grasp_type(name: &str) -> Result<graspd_proto::v1::GraspType, String> {
+    graspd_proto::v1::GraspType::from_str_name(&format!("GRASP_TYPE_{}", name.to_uppercase()))
+        .filter(|t| *t != graspd_proto::v1::GraspType::Unspecified)
+        .ok_or_else(|| {
+            format!(
+                "unknown grasp type '{name}' (large_wrap, small_wrap, power, pinch, precision, tripod)"
+            )
+        })
 }

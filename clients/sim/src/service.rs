@@ -18,6 +18,15 @@ pub struct Service {
     rt: tokio::runtime::Handle,
 }
 
+/// What a robot stack asks of PlanGrasp beyond the frame: how many ranked plans to return and,
+/// optionally, the grasp type (graspd detects it when None).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PlanAsk {
+    /// `options.candidates` (0: graspd's default, one plan).
+    pub candidates: u32,
+    pub grasp_type: Option<pb::GraspType>,
+}
+
 /// What a trial needs from a plan.
 #[derive(Debug, Clone)]
 pub struct PlanResult {
@@ -86,6 +95,7 @@ impl Service {
         image: &RgbdImage,
         cloud: Option<&[Point3<f64>]>,
         seed: u64,
+        ask: PlanAsk,
     ) -> Result<PlanResult, tonic::Status> {
         let mut c = self.client.clone();
         let intr = image.intrinsics;
@@ -137,6 +147,7 @@ impl Service {
             options: Some(pb::PlannerOptions {
                 seed: Some(seed),
                 squeeze_depth: Some(hand.squeeze_depth),
+                candidates: (ask.candidates > 0).then_some(ask.candidates),
                 ..Default::default()
             }),
             hints: Some(pb::PlanHints {
@@ -145,6 +156,7 @@ impl Service {
                     y: eye.y,
                     z: eye.z,
                 }),
+                grasp_type: ask.grasp_type.map_or(0, |t| t as i32),
                 ..Default::default()
             }),
             ..Default::default()

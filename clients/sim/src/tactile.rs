@@ -276,7 +276,7 @@ pub fn run_disturbance_trial(
         slid_mm: 0.0,
     };
     let image = trial.render(opts.intrinsics, opts.camera);
-    let plan = match service.plan(hand, &image, None, seed) {
+    let plan = match service.plan(hand, &image, None, seed, Default::default()) {
         Ok(p) => p,
         Err(s) => {
             out.detail = format!("no plan: {}", s.message());

@@ -9,9 +9,9 @@
 //!    actuator at graspd's `pregrasp_joints` (each servo's equilibrium there) and holds 0.3 s;
 //! 4. approach: the base moves in a straight line to `root_pose` in [`APPROACH_S`];
 //! 5. close: every actuator together in [`CLOSE_S`], from the pre-grasp through the touching
-//!    `joints` (two thirds of the time) to `squeeze_joints`, then 0.4 s settle — open loop, or
-//!    with `guarded_close` each actuator stops where what it moves touches the object and
-//!    squeezes from there ([`crate::closing`]);
+//!    `joints` (two thirds of the time) to `squeeze_joints`, then 0.4 s settle — guarded (each
+//!    actuator stops where what it moves touches the object and squeezes from there), or open
+//!    loop when asked ([`crate::closing`]);
 //! 6. lift: the base rises [`LIFT_M`] in [`LIFT_S`]; hold [`HOLD_S`];
 //! 7. shake: [`SHAKE_S`] of a sinusoidal displacement of amplitude [`SHAKE_AMPLITUDE_M`] at
 //!    [`SHAKE_HZ`] along (1, 1, 0.5)/|·| (peak acceleration ≈ 3.2 m/s²), then 0.3 s still.
@@ -32,7 +32,7 @@
 use crate::camera::{self, Intrinsics, RgbdImage};
 use crate::hand::SimHand;
 use crate::scene::{PARKED, Scene, from_mj, on_table, to_mj};
-use crate::service::{PlanResult, Service, grasp_type_name, pose_from_proto};
+use crate::service::{PlanAsk, PlanResult, Service, grasp_type_name, pose_from_proto};
 use mujoco_rs::prelude::*;
 use nalgebra::{Isometry3, Point3, Vector3};
 use rand::{RngExt, SeedableRng};
@@ -101,8 +101,13 @@ pub struct TrialOptions {
     pub replans: usize,
     /// Render a snapshot with the hand after the hold, from this view.
     pub snapshot: Option<(Intrinsics, Isometry3<f64>)>,
-    /// Close guarded instead of open loop ([`crate::closing`]).
+    /// Close guarded (the default) instead of open loop ([`crate::closing`]).
     pub guarded_close: bool,
+    /// Execute the plan ranked this far down graspd's `candidates` (0: the best), as a robot
+    /// stack falling back would.
+    pub candidate: usize,
+    /// Force this grasp type instead of graspd's detection.
+    pub grasp_type: Option<graspd_proto::v1::GraspType>,
 }
 
 /// What one trial did.
@@ -136,6 +141,10 @@ pub struct TrialRecord {
     pub approach: Option<[f64; 3]>,
     pub robustness: Option<f64>,
     pub planned_contacts: Vec<String>,
+    /// The executed plan's contact positions (world), its resisted weight and S (Eq 5.3).
+    pub planned_positions: Vec<[f64; 3]>,
+    pub gravity_resistance: Option<f64>,
+    pub gii: Option<f64>,
     /// How far the object moved during the approach and during the close, mm, and how much it
     /// turned during the close, degrees; the hand bodies touching it after closing.
     pub moved_approach_mm: Option<f64>,
@@ -174,6 +183,9 @@ impl TrialRecord {
             approach: None,
             robustness: None,
             planned_contacts: Vec::new(),
+            planned_positions: Vec::new(),
+            gravity_resistance: None,
+            gii: None,
             moved_approach_mm: None,
             moved_close_mm: None,
             turned_close_deg: None,
@@ -433,7 +445,15 @@ pub fn run_trial(
     let mut sim_s = t_sim.elapsed().as_secs_f64() - rec.render_ms / 1e3;
     // A robot stack re-plans when the planner says a plan is infeasible: up to `replans` more
     // seeds, the first feasible plan wins, else the first plan is executed.
-    let mut plan = service.plan(hand, &image, cloud.as_deref(), seed);
+    let ask = PlanAsk {
+        candidates: if opts.candidate > 0 {
+            opts.candidate as u32 + 1
+        } else {
+            0
+        },
+        grasp_type: opts.grasp_type,
+    };
+    let mut plan = service.plan(hand, &image, cloud.as_deref(), seed, ask);
     let mut attempts = 1;
     let mut extra_ms = 0.0;
     while attempts <= opts.replans && matches!(&plan, Ok(p) if !p.response.feasible) {
@@ -442,6 +462,7 @@ pub fn run_trial(
             &image,
             cloud.as_deref(),
             seed + 1000 * attempts as u64,
+            ask,
         );
         attempts += 1;
         if let Ok(p) = &again {
@@ -453,6 +474,11 @@ pub fn run_trial(
     }
     rec.plan_attempts = attempts;
     rec.replan_ms = extra_ms;
+    if opts.candidate > 0
+        && let Ok(p) = &mut plan
+    {
+        take_candidate(&mut p.response, opts.candidate);
+    }
     let t_sim = std::time::Instant::now();
     let outcome = match plan {
         Err(s) => {
@@ -465,6 +491,27 @@ pub fn run_trial(
     sim_s += t_sim.elapsed().as_secs_f64();
     rec.sim_ms = sim_s * 1e3;
     rec
+}
+
+/// Puts the plan ranked `k`-th in `candidates` in the response's place (no joints when graspd
+/// returned fewer: the trial then ends `no_plan`).
+fn take_candidate(r: &mut graspd_proto::v1::PlanGraspResponse, k: usize) {
+    match r.candidates.get(k).cloned() {
+        Some(c) => {
+            r.contacts = c.contacts;
+            r.hand_pose = c.hand_pose;
+            r.pregrasp_pose = c.pregrasp_pose;
+            r.root_pose = c.root_pose;
+            r.approach = c.approach;
+            r.joints = c.joints;
+            r.pregrasp_joints = c.pregrasp_joints;
+            r.squeeze_joints = c.squeeze_joints;
+            r.quality = c.quality;
+            r.feasible = c.feasible;
+            r.infeasible_reason = c.infeasible_reason;
+        }
+        None => r.joints.clear(),
+    }
 }
 
 /// What the approach leaves for the rest of a trial.
@@ -499,6 +546,13 @@ pub fn pre_grasp_and_approach(
     rec.approach = r.approach.map(|a| [a.x, a.y, a.z]);
     rec.robustness = r.quality.map(|q| q.robustness);
     rec.planned_contacts = r.contacts.iter().map(|c| c.finger.clone()).collect();
+    rec.planned_positions = r
+        .contacts
+        .iter()
+        .filter_map(|c| c.position.map(|p| [p.x, p.y, p.z]))
+        .collect();
+    rec.gravity_resistance = r.quality.map(|q| q.gravity_resistance);
+    rec.gii = r.quality.map(|q| q.gii);
     let (Some(root), Some(hand_pose), Some(pre)) = (
         pose_from_proto(&r.root_pose),
         pose_from_proto(&r.hand_pose),
@@ -587,7 +641,7 @@ fn execute(
         Ok(a) => a,
         Err(o) => return o,
     };
-    // Close (crate::closing): open loop unless the options ask for the guarded close.
+    // Close (crate::closing): guarded unless the options ask for the open loop.
     let (before_p, before_q) = (trial.object_position(), trial.object_orientation());
     crate::closing::close(trial, &grasp, &closed, opts.guarded_close);
     debug_snapshot(trial, "closed");
@@ -647,14 +701,15 @@ fn execute(
 }
 
 /// With GRASPD_SIM_DEBUG_DIR set, saves a picture of each phase there (for looking at a trial):
-/// two close views of the object, from the front left and from the right.
+/// two views of the object, from the front left and from the right, far enough to see a tall
+/// object's top and the hand above it.
 pub(crate) fn debug_snapshot(trial: &mut Trial, phase: &str) {
     if let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") {
-        let o = trial.object_position() + Vector3::new(0.0, 0.0, 0.05);
+        let o = trial.object_position() + Vector3::new(0.0, 0.0, 0.09);
         let mut imgs = Vec::new();
         for eye in [
-            Vector3::new(-0.22, -0.2, 0.18),
-            Vector3::new(0.25, -0.12, 0.2),
+            Vector3::new(-0.35, -0.32, 0.26),
+            Vector3::new(0.4, -0.2, 0.3),
         ] {
             let view = camera::look_at(o + eye, o);
             imgs.push(trial.render(Intrinsics::kinect(360, 270), view));
@@ -753,4 +808,44 @@ fn smooth(f: f64) -> f64 {
 pub fn base_pose(trial: &Trial) -> Isometry3<f64> {
     let m = trial.scene.mount_mocap;
     from_mj(&trial.data.mocap_pos()[m], &trial.data.mocap_quat()[m])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::take_candidate;
+    use graspd_proto::v1 as pb;
+
+    fn joint(name: &str, angle: f64) -> pb::JointAngle {
+        pb::JointAngle {
+            name: name.into(),
+            angle,
+        }
+    }
+
+    /// The fall-back plan takes the response's place whole (joints, squeeze, feasibility); one
+    /// graspd did not return leaves no joints, so the trial ends `no_plan` instead of running
+    /// the best plan under another name.
+    #[test]
+    fn a_fall_back_candidate_replaces_the_plan_whole() {
+        let second = pb::GraspCandidate {
+            joints: vec![joint("j", 0.3)],
+            squeeze_joints: vec![joint("j", 0.4)],
+            feasible: false,
+            infeasible_reason: Some("second".into()),
+            ..Default::default()
+        };
+        let mut r = pb::PlanGraspResponse {
+            joints: vec![joint("j", 0.1)],
+            feasible: true,
+            candidates: vec![pb::GraspCandidate::default(), second],
+            ..Default::default()
+        };
+        take_candidate(&mut r, 1);
+        assert_eq!(r.joints, vec![joint("j", 0.3)]);
+        assert_eq!(r.squeeze_joints, vec![joint("j", 0.4)]);
+        assert!(!r.feasible);
+        assert_eq!(r.infeasible_reason.as_deref(), Some("second"));
+        take_candidate(&mut r, 2);
+        assert!(r.joints.is_empty());
+    }
 }

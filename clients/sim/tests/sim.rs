@@ -343,7 +343,9 @@ fn trial_options() -> TrialOptions {
         cloud_input: false,
         replans: 0,
         snapshot: None,
-        guarded_close: false,
+        guarded_close: true,
+        candidate: 0,
+        grasp_type: None,
     }
 }
 
