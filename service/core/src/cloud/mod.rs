@@ -7,7 +7,7 @@ pub mod pca;
 pub mod plane;
 pub mod point_cloud;
 
-pub use completion::{Completion, mirror_completion};
+pub use completion::{Completion, symmetric_completion};
 pub use normals::{
     CloudIndex, LazyNormals, Orientation, estimate_normals, knn_lists, normals_from_neighbours,
 };

@@ -12,7 +12,7 @@ use super::type_rule;
 use super::types::*;
 use crate::cloud::{
     CloudIndex, LazyNormals, MIN_POINTS, Orientation, Plane, PointCloud, RansacParams,
-    detect_support_plane, mirror_completion,
+    detect_support_plane, symmetric_completion,
 };
 use crate::error::{FieldError, PlanError};
 use crate::grasp_type::{GraspType, HandPart};
@@ -198,16 +198,11 @@ fn complete_unseen(
     let (Some(v), Some(u), true) = (viewpoint, up, enabled) else {
         return plain;
     };
-    let Some(c) = mirror_completion(&scene.points, &v, &u, scene.plane.as_ref()) else {
+    let Some(c) = symmetric_completion(&scene.points, &v, &u, scene.plane.as_ref()) else {
         return plain;
     };
-    let h = c.mirror.normal;
     if let Some(n) = &mut scene.normals {
-        let mirrored: Vec<Vector3<f64>> = c
-            .source
-            .iter()
-            .map(|&i| n[i] - h * (2.0 * n[i].dot(&h)))
-            .collect();
+        let mirrored: Vec<Vector3<f64>> = c.source.iter().map(|&i| c.turn_vector(&n[i])).collect();
         n.extend(mirrored);
     }
     let more: Vec<usize> = c.source.iter().map(|&i| scene.original[i]).collect();
