@@ -191,8 +191,10 @@ fn derived_descriptions_validate() {
             g.max_height
         );
         if fingers == 2 {
+            // The 2F-85 opens 85 mm between its pads (Robotiq's datasheet); their centres are
+            // 93 mm apart.
             assert!(
-                (g.max_aperture - 0.093).abs() < 0.005,
+                (g.max_aperture - 0.085).abs() < 0.003,
                 "{file}: a_max {}",
                 g.max_aperture
             );

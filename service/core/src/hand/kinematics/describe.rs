@@ -5,8 +5,11 @@
 //! hand frame ([`KinematicHand::hand_frame`]) for each. Then, with t the thumb and J the other
 //! fingers:
 //! - `max_aperture` (a_max of Eq 5.4, two contacts): the largest opening along the closing
-//!   direction, max over samples and j ∈ J of (p_j − p_t)·x; `min_aperture`: the smallest,
-//!   not below 0;
+//!   direction between the tips' surfaces, max over samples and j ∈ J of (p_j − p_t)·x less
+//!   half of each tip's thickness (the smallest extent of its collision bounding box): what an
+//!   object may measure to fit between them (the 2F-85: 8.5 cm, not the 9.3 cm between its pad
+//!   centres, which let stage 1 propose pinches wider than the gripper opens); `min_aperture`:
+//!   the smallest (p_j − p_t)·x, not below 0;
 //! - `max_height` (h_max of Eq 5.4): the largest height z of the centroid of all contact points;
 //! - `max_polygon_area` (a_max for ≥ 3 contacts): the largest area of the triangle of the thumb
 //!   and the two outermost fingers of J (by base y); `max_finger_spread`: the largest distance
@@ -55,6 +58,19 @@ impl KinematicHand {
         let mut others: Vec<usize> = (0..n).filter(|&j| j != t).collect();
         others.sort_by(|&a, &b| bases[a].y.total_cmp(&bases[b].y).then(a.cmp(&b)));
 
+        // Each tip's thickness: the smallest extent of its collision bounds (or its parent's).
+        let thickness: Vec<f64> = self
+            .fingers
+            .iter()
+            .map(|f| {
+                collision_bounds(&self.tree, f.tip)
+                    .or_else(|| collision_bounds(&self.tree, self.tree.bodies[f.tip].parent?))
+                    .map_or(0.0, |(lo, hi)| {
+                        let e = hi - lo;
+                        e.x.min(e.y).min(e.z)
+                    })
+            })
+            .collect();
         let mut max_aperture = f64::NEG_INFINITY;
         let mut min_aperture = f64::INFINITY;
         let mut max_height = f64::NEG_INFINITY;
@@ -65,7 +81,7 @@ impl KinematicHand {
         for s in &samples {
             for &j in &others {
                 let a = s[j].x - s[t].x;
-                max_aperture = max_aperture.max(a);
+                max_aperture = max_aperture.max(a - 0.5 * (thickness[j] + thickness[t]));
                 min_aperture = min_aperture.min(a);
             }
             let c = s.iter().map(|p| p.coords).sum::<Vector3<f64>>() / n as f64;

@@ -271,6 +271,14 @@ pub fn search(
         taking_part,
     };
     let object = ObjectView::new(ctx.points, ctx.normals, ctx.plane.as_ref());
+    for (a, b) in oppositions.iter().take(4) {
+        tracing::debug!(
+            oc1 = ?ctx.points[*a].coords.as_slice(),
+            oc2 = ?ctx.points[*b].coords.as_slice(),
+            width = (ctx.points[*b] - ctx.points[*a]).norm(),
+            "stage-1 opposition"
+        );
+    }
     let mut order: Vec<(f64, usize, Vector3<f64>)> = Vec::new();
     for (rank, &(a, b)) in oppositions.iter().take(4).enumerate() {
         let line = match (ctx.points[b] - ctx.points[a]).try_normalize(1e-9) {
