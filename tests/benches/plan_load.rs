@@ -44,6 +44,7 @@ fn grpc_request(points: &[u8], i: usize) -> pb::PlanGraspRequest {
         }),
         hints: None,
         output: None,
+        extra_views: Vec::new(),
     }
 }
 

@@ -312,6 +312,7 @@ pub fn grpc_request_with_points(points: Vec<u8>, hand: &str, seed: u64) -> pb::P
             ..Default::default()
         }),
         output: None,
+        extra_views: Vec::new(),
     }
 }
 

@@ -72,6 +72,7 @@ async fn shared_hands_plan_on_ycb_views_with_joints_inside_limits() {
                     ..Default::default()
                 }),
                 output: None,
+                extra_views: Vec::new(),
             };
             let plan = grpc
                 .plan_grasp(request)
@@ -171,6 +172,7 @@ async fn candidates_pregrasp_and_squeeze_come_back_the_same_over_grpc_and_rest()
             ..Default::default()
         }),
         output: None,
+        extra_views: Vec::new(),
     };
     let reply = server
         .grpc()

@@ -38,6 +38,7 @@ fn rgbd_request() -> pb::PlanGraspRequest {
         }),
         hints: None,
         output: None,
+        extra_views: Vec::new(),
     }
 }
 

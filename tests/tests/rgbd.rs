@@ -50,6 +50,7 @@ fn grpc_request(frame: pb::RgbdFrame, pixel: Option<(u32, u32)>) -> pb::PlanGras
             ..Default::default()
         }),
         output: None,
+        extra_views: Vec::new(),
     }
 }
 

@@ -66,6 +66,7 @@ async fn ycb_objects_with_every_builtin_hand_over_grpc_and_rest() {
                     ..Default::default()
                 }),
                 output: None,
+                extra_views: Vec::new(),
             };
             let grpc = server.grpc().await.plan_grasp(request).await;
             let grpc = plan_from_proto(

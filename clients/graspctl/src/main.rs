@@ -293,6 +293,7 @@ fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
     };
     Ok(PlanRequest {
         source,
+        extra_views: Vec::new(),
         hand,
         options: PlannerOptions {
             seed: args.seed,

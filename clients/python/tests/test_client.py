@@ -134,6 +134,33 @@ def test_rgbd_frames_are_encoded_for_the_wire(server):
         assert field_of(e.value) == "rgbd.depth.data"
 
 
+def test_further_views_go_with_their_camera_poses(server):
+    # A camera 0.8 m above a table, looking straight down (optical z = world −z).
+    down = np.array([[1.0, 0, 0, 0], [0, -1.0, 0, 0], [0, 0, -1.0, 0.8], [0, 0, 0, 1.0]])
+    h, w = 120, 160
+    color = np.full((h, w, 3), 150, np.uint8)
+    depth = np.full((h, w), 800, np.uint16)
+    color[50:70, 70:90] = (200, 40, 30)
+    depth[50:70, 70:90] = 700
+    frame = rgbd_message(color, depth, 150.0, 150.0, 79.5, 59.5, camera_to_world=down)
+    q = frame.camera_to_world.orientation
+    # A half turn about x: quaternion (1, 0, 0, 0).
+    assert abs(abs(q.x) - 1.0) < 1e-9 and abs(q.w) < 1e-9 and frame.camera_to_world.position.z == 0.8
+    with pytest.raises(ValueError, match="camera_to_world"):
+        rgbd_message(color, depth, 150.0, 150.0, 79.5, 59.5, camera_to_world=np.eye(3))
+    unposed = rgbd_message(color, depth, 150.0, 150.0, 79.5, 59.5)
+    with Client(server.grpc) as c:
+        plan = c.plan_rgbd(color, depth, 150.0, 150.0, 79.5, 59.5, camera_to_world=down,
+                           extra_views=[frame])
+        assert plan.perception.fused_views == 1
+        for contact in plan.contacts:
+            assert abs(contact.position.z - 0.1) <= 0.1  # on the block (world frame)
+        with pytest.raises(grpc.RpcError) as e:
+            c.plan_rgbd(color, depth, 150.0, 150.0, 79.5, 59.5, camera_to_world=down,
+                        extra_views=[unposed])
+        assert field_of(e.value) == "extra_views[0].camera_to_world"
+
+
 def raw_reading(t: int) -> Reading:
     """Raw classic-BioTac counts: at rest for 60 frames, then pressed (pdc up, electrodes down)."""
     pressed = t >= 60

@@ -67,6 +67,9 @@ pub struct Cli {
     /// Largest RGB-D frame, width × height pixels [default: 16777216 (4096²)].
     #[arg(long, env = "GRASPD_MAX_IMAGE_PIXELS", value_name = "N")]
     pub max_image_pixels: Option<usize>,
+    /// Most further RGB-D views (`extra_views`) fused into one plan request [default: 8].
+    #[arg(long, env = "GRASPD_MAX_VIEWS", value_name = "N")]
+    pub max_views: Option<usize>,
     /// The grasp-type network (ONNX, docs/model-contract.md) for RGB-D input [default: the copy
     /// of models/grasp_type/grasp_type.onnx built into graspd; if it cannot be loaded (no ONNX
     /// Runtime) graspd warns and the geometric rule decides types]. `none`: no model. A given
@@ -138,6 +141,7 @@ pub struct FileConfig {
     pub drain_delay_ms: Option<u64>,
     pub max_tactile_sessions: Option<usize>,
     pub max_image_pixels: Option<usize>,
+    pub max_views: Option<usize>,
     /// Bearer tokens, as `--auth-token`.
     #[serde(default)]
     pub auth_tokens: Vec<String>,
@@ -169,6 +173,7 @@ pub struct Settings {
     pub drain_delay_ms: u64,
     pub max_tactile_sessions: usize,
     pub max_image_pixels: usize,
+    pub max_views: usize,
     /// Never printed: `--print-config` shows their count in a comment.
     #[serde(skip)]
     pub auth_tokens: Tokens,
@@ -288,6 +293,7 @@ impl Settings {
                 .max_image_pixels
                 .or(file.max_image_pixels)
                 .unwrap_or(d.max_image_pixels),
+            max_views: cli.max_views.or(file.max_views).unwrap_or(d.max_views),
             auth_tokens,
             auth_tokens_file,
             grasp_type_model: cli.grasp_type_model.clone().or(file.grasp_type_model),
@@ -349,6 +355,12 @@ impl Settings {
                     "must be at least 3072 (64×48), got {}",
                     self.max_image_pixels
                 ),
+            });
+        }
+        if self.max_views > 64 {
+            return Err(ConfigError::Invalid {
+                field: "max_views",
+                message: format!("must be at most 64, got {}", self.max_views),
             });
         }
         if self.model_threads == 0 || self.model_threads > 64 {
@@ -435,6 +447,7 @@ impl Settings {
             max_queued_plans: self.max_queued_plans,
             max_tactile_sessions: self.max_tactile_sessions,
             max_image_pixels: self.max_image_pixels,
+            max_views: self.max_views,
         }
     }
 }

@@ -4,9 +4,10 @@
 
 use crate::hand_store::{self, HandUpload};
 use graspd_core::cloud::{Plane, PointCloud};
+use graspd_core::perception::segmentation::SegmentationParams;
 use graspd_core::perception::{
-    DecodedFrame, GraspInformation, GraspTypeModel, InformationParams, RgbdFrame, RgbdLimits,
-    TargetHint, draw_overlay, grasp_information,
+    DecodedFrame, FusionReport, GraspInformation, GraspTypeModel, InformationParams, RgbdFrame,
+    RgbdLimits, TargetHint, draw_overlay, fuse_views, grasp_information,
 };
 use graspd_core::planning::{KinematicModel, PlaneSource};
 use graspd_core::tactile::{
@@ -42,7 +43,12 @@ pub struct Limits {
     pub max_tactile_sessions: usize,
     /// Largest RGB-D frame, `width × height` pixels (also what a PNG or JPEG may decode to).
     pub max_image_pixels: usize,
+    /// Most further views (`extra_views`) fused into one plan request.
+    pub max_views: usize,
 }
+
+/// Default of [`Limits::max_views`].
+pub const DEFAULT_MAX_VIEWS: usize = 8;
 
 /// Default of [`Limits::max_tactile_sessions`].
 pub const DEFAULT_MAX_TACTILE_SESSIONS: usize = 64;
@@ -63,6 +69,7 @@ impl Default for Limits {
             max_queued_plans: QUEUED_PLANS_PER_PLANNER * default_concurrent_plans(),
             max_tactile_sessions: DEFAULT_MAX_TACTILE_SESSIONS,
             max_image_pixels: RgbdLimits::default().max_pixels,
+            max_views: DEFAULT_MAX_VIEWS,
         }
     }
 }
@@ -156,6 +163,8 @@ struct Perceived {
     info: GraspInformation,
     /// The support plane came from the frame (the caller gave none).
     plane_from_frame: bool,
+    /// What the further views added (`extra_views`).
+    fusion: Option<FusionReport>,
 }
 
 impl Perceived {
@@ -174,6 +183,11 @@ impl Perceived {
             self.decoded.height,
             output.probability_maps_max_side as usize,
         );
+        if let Some(f) = self.fusion {
+            report.fused_views = f.views;
+            report.fused_points = f.added_points;
+            report.object_points += f.added_points;
+        }
         if output.overlay {
             report.overlay_png = Some(draw_overlay(&self.decoded, &self.info, plan));
         }
@@ -185,6 +199,8 @@ impl Perceived {
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlanRequest {
     pub source: PlanSource,
+    /// Further views of the scene (RGB-D input only; `extra_views`).
+    pub extra_views: Vec<RgbdFrame>,
     pub hand: HandChoice,
     pub options: PlannerOptions,
     pub hints: PlanHints,
@@ -565,8 +581,25 @@ impl GraspService {
         let (hand, kinematics) = self.choose_hand(request.hand)?;
         let mut hints = validate_hints(request.hints, &hand)?;
         validate_options(&request.options)?;
+        let max_views = self.inner.limits.max_views;
+        if request.extra_views.len() > max_views {
+            return Err(ServiceError::TooLarge(FieldError::new(
+                "extra_views",
+                format!(
+                    "{} further views exceed the configured limit of {max_views} (max_views)",
+                    request.extra_views.len()
+                ),
+            )));
+        }
         let (mut cloud, perceived) = match request.source {
             PlanSource::Cloud(cloud) => {
+                if !request.extra_views.is_empty() {
+                    return Err(FieldError::new(
+                        "extra_views",
+                        "are further RGB-D views: they need rgbd input (fuse clouds yourself)",
+                    )
+                    .into());
+                }
                 if let Some(field) = request.image_hints.field() {
                     return Err(FieldError::new(
                         field,
@@ -577,7 +610,7 @@ impl GraspService {
                 (cloud, None)
             }
             PlanSource::Rgbd(frame) => {
-                let perceived = self.perceive(&frame, &request.image_hints, &hand, &hints)?;
+                let mut perceived = self.perceive(&frame, &request.image_hints, &hand, &hints)?;
                 let info = &perceived.info;
                 hints.support_plane = hints.support_plane.or(info.plane);
                 hints.viewpoint = hints.viewpoint.or(Some(info.viewpoint));
@@ -585,7 +618,35 @@ impl GraspService {
                 if hints.grasp_type.is_none() {
                     hints.detected_types = info.detection.as_ref().map(|d| d.probabilities);
                 }
-                (info.object.clone(), Some(perceived))
+                let mut object = info.object.clone();
+                if !request.extra_views.is_empty() {
+                    if frame.camera_to_world.is_none() {
+                        return Err(FieldError::new(
+                            "rgbd.camera_to_world",
+                            "is required with extra_views: the views are fused in the world frame",
+                        )
+                        .into());
+                    }
+                    let views = request
+                        .extra_views
+                        .iter()
+                        .enumerate()
+                        .map(|(i, f)| self.decode_frame(f, &format!("extra_views[{i}]")))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    let (fused, report) = fuse_views(
+                        &object,
+                        hints.support_plane.as_ref(),
+                        &views,
+                        &SegmentationParams::default(),
+                        "extra_views",
+                    )?;
+                    object = fused;
+                    // The far side is measured: no mirror completion, and normals point away
+                    // from the object's centre (a single viewpoint no longer sees them all).
+                    hints.viewpoint = None;
+                    perceived.fusion = Some(report);
+                }
+                (object, Some(perceived))
             }
         };
         let max_points = self.inner.limits.max_points;
@@ -623,21 +684,8 @@ impl GraspService {
         hand: &HandDescription,
         hints: &PlanHints,
     ) -> Result<Perceived, ServiceError> {
-        let limits = RgbdLimits {
-            max_pixels: self.inner.limits.max_image_pixels,
-        };
-        let pixels = frame.width.saturating_mul(frame.height);
-        if pixels > limits.max_pixels {
-            return Err(ServiceError::TooLarge(FieldError::new(
-                "rgbd",
-                format!(
-                    "{}×{} = {pixels} pixels exceed the configured limit of {} (max_image_pixels)",
-                    frame.width, frame.height, limits.max_pixels
-                ),
-            )));
-        }
         let t = std::time::Instant::now();
-        let decoded = frame.decode("rgbd", &limits)?;
+        let decoded = self.decode_frame(frame, "rgbd")?;
         let decode_seconds = t.elapsed().as_secs_f64();
         let target = image_hints.target()?;
         let model = self.inner.grasp_type_model.as_deref();
@@ -655,7 +703,26 @@ impl GraspService {
             decoded,
             info,
             plane_from_frame: hints.support_plane.is_none(),
+            fusion: None,
         })
+    }
+
+    /// Decodes a frame (`field` names it) within the configured pixel limit.
+    fn decode_frame(&self, frame: &RgbdFrame, field: &str) -> Result<DecodedFrame, ServiceError> {
+        let limits = RgbdLimits {
+            max_pixels: self.inner.limits.max_image_pixels,
+        };
+        let pixels = frame.width.saturating_mul(frame.height);
+        if pixels > limits.max_pixels {
+            return Err(ServiceError::TooLarge(FieldError::new(
+                field,
+                format!(
+                    "{}×{} = {pixels} pixels exceed the configured limit of {} (max_image_pixels)",
+                    frame.width, frame.height, limits.max_pixels
+                ),
+            )));
+        }
+        Ok(frame.decode(field, &limits)?)
     }
 
     /// The hand of a request and its kinematics, when known.
@@ -1166,6 +1233,7 @@ mod tests {
     fn request(hand: &str) -> PlanRequest {
         PlanRequest {
             source: PlanSource::Cloud(cylinder(100)),
+            extra_views: Vec::new(),
             hand: HandChoice::Name(hand.into()),
             options: PlannerOptions::default(),
             hints: PlanHints::default(),

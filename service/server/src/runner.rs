@@ -154,6 +154,7 @@ mod tests {
             .collect();
         PlanRequest {
             source: PlanSource::Cloud(PointCloud::new(points)),
+            extra_views: Vec::new(),
             hand: HandChoice::Name("shadow".into()),
             options: Default::default(),
             hints: Default::default(),

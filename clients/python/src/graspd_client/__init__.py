@@ -104,9 +104,12 @@ def rgbd_message(
     cy: float,
     color_encoding: str = "rgb8",
     depth_scale: float = 0.0,
+    camera_to_world=None,
 ) -> plan_pb2.RgbdFrame:
     """An (H, W, 3) uint8 colour image and an (H, W) depth image (uint16 millimetres as 16UC1,
-    or float32 metres as 32FC1) with pinhole intrinsics, as an RgbdFrame."""
+    or float32 metres as 32FC1) with pinhole intrinsics, as an RgbdFrame. ``camera_to_world``: the
+    camera's pose as a 4x4 homogeneous matrix (optical frame: x right, y down, z forward); plans
+    are then in the world frame, and the frame can be fused with others (``extra_views``)."""
     color = np.asarray(color)
     depth = np.asarray(depth)
     if color.ndim != 3 or color.shape[2] != 3 or color.dtype != np.uint8:
@@ -119,12 +122,42 @@ def rgbd_message(
         raise ValueError(f"depth: expected uint16 (mm) or float32 (m), got {depth.dtype}")
     if depth.shape != color.shape[:2]:
         raise ValueError(f"depth: shape {depth.shape} does not match color {color.shape[:2]}")
-    return plan_pb2.RgbdFrame(
+    frame = plan_pb2.RgbdFrame(
         color=_image(color, color_encoding),
         depth=_image(depth.astype(depth.dtype.newbyteorder("<")), depth_encoding),
         intrinsics=plan_pb2.CameraIntrinsics(fx=fx, fy=fy, cx=cx, cy=cy),
         depth_scale=depth_scale,
     )
+    if camera_to_world is not None:
+        frame.camera_to_world.CopyFrom(_pose(camera_to_world))
+    return frame
+
+
+def _pose(matrix) -> common_pb2.Pose:
+    """A 4x4 homogeneous rigid transform as a Pose (position + unit quaternion x, y, z, w)."""
+    m = np.asarray(matrix, dtype=float)
+    if m.shape != (4, 4) or not np.allclose(m[3], [0.0, 0.0, 0.0, 1.0]):
+        raise ValueError(f"camera_to_world: expected a 4x4 homogeneous matrix, got {m.shape}")
+    r = m[:3, :3]
+    if not np.allclose(r @ r.T, np.eye(3), atol=1e-6) or np.linalg.det(r) < 0:
+        raise ValueError("camera_to_world: the rotation part is not a rotation")
+    # Shepperd's method: the largest of w, x, y, z first, for accuracy.
+    t = np.trace(r)
+    k = int(np.argmax([t, r[0, 0], r[1, 1], r[2, 2]]))
+    if k == 0:
+        s = 2.0 * np.sqrt(1.0 + t)
+        q = (0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s)
+    else:
+        i, j, l = [(0, 1, 2), (1, 2, 0), (2, 0, 1)][k - 1]
+        s = 2.0 * np.sqrt(1.0 + r[i, i] - r[j, j] - r[l, l])
+        v = [0.0, 0.0, 0.0]
+        v[i] = 0.25 * s
+        v[j] = (r[j, i] + r[i, j]) / s
+        v[l] = (r[l, i] + r[i, l]) / s
+        q = ((r[l, j] - r[j, l]) / s, *v)
+    w, x, y, z = q
+    return common_pb2.Pose(position=_vec3(m[:3, 3]),
+                           orientation=common_pb2.Quaternion(x=x, y=y, z=z, w=w))
 
 
 def _vec3(v) -> common_pb2.Vec3:
@@ -277,13 +310,20 @@ class Client:
         )
 
     def plan_rgbd(self, color, depth, fx, fy, cx, cy, hand: str = "parallel_gripper",
-                  seed: int = 0, **kwargs) -> plan_pb2.PlanGraspResponse:
-        """Plans on an RGB-D frame (see ``rgbd_message``)."""
+                  seed: int = 0, camera_to_world=None,
+                  extra_views: Sequence[plan_pb2.RgbdFrame] = (),
+                  **kwargs) -> plan_pb2.PlanGraspResponse:
+        """Plans on an RGB-D frame (see ``rgbd_message``). ``extra_views``: further frames of the
+        same scene, each built by ``rgbd_message`` with its ``camera_to_world`` (as this frame
+        then needs too); graspd adds what they see of the target object to this frame's points."""
         frame = rgbd_message(color, depth, fx, fy, cx, cy,
                              color_encoding=kwargs.pop("color_encoding", "rgb8"),
-                             depth_scale=kwargs.pop("depth_scale", 0.0))
+                             depth_scale=kwargs.pop("depth_scale", 0.0),
+                             camera_to_world=camera_to_world)
+        request = plan_pb2.PlanGraspRequest(rgbd=frame)
+        request.extra_views.extend(extra_views)
         return self.plan(
-            self._request(plan_pb2.PlanGraspRequest(rgbd=frame), hand, seed,
+            self._request(request, hand, seed,
                           kwargs.pop("grasp_type", None), None, None, None, False)
         )
 

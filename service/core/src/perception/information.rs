@@ -247,9 +247,14 @@ pub struct PerceptionReport {
     pub roi: [u32; 4],
     pub roi_pixels: usize,
     pub target_source: TargetChoice,
-    /// Object clusters in view and the target's points.
+    /// Object clusters in view and the target's points (with those further views added).
     pub objects: usize,
     pub object_points: usize,
+    /// Further views fused ([`super::view_fusion`]) and the points they added.
+    #[serde(default)]
+    pub fused_views: usize,
+    #[serde(default)]
+    pub fused_points: usize,
     /// The attention pixel (from the caller's pixel or the model), when there is one.
     pub attention_pixel: Option<[f64; 2]>,
     pub timings: PerceptionTimings,
@@ -274,6 +279,8 @@ impl GraspInformation {
             target_source: self.target_choice,
             objects: self.objects,
             object_points: self.object.len(),
+            fused_views: 0,
+            fused_points: 0,
             attention_pixel: self.attention_pixel.map(|(u, v)| [u, v]),
             timings: self.timings,
             probability_maps: self

@@ -16,6 +16,8 @@
 //! - [`overlay`]: the picture of a plan for people.
 //! - [`information`]: the whole chain from a decoded frame to Ω = {ROI, grasp type, attention
 //!   point}.
+//! - [`view_fusion`]: further views of the same object (camera-to-world known) added to the
+//!   first view's object points.
 
 pub mod depth_to_cloud;
 pub mod grasp_type_detection;
@@ -25,6 +27,7 @@ pub mod rgbd;
 pub mod roi;
 pub mod saliency;
 pub mod segmentation;
+pub mod view_fusion;
 
 pub use depth_to_cloud::{CloudFrame, PixelCloud, back_project, depth_to_cloud};
 pub use grasp_type_detection::{
@@ -46,3 +49,4 @@ pub use segmentation::{
     Cluster, Segmentation, SegmentationParams, TargetChoice, TargetHint, euclidean_clusters,
     segment,
 };
+pub use view_fusion::{FusionReport, fuse_views};

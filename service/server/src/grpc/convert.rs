@@ -499,8 +499,9 @@ fn hints_from_proto(h: Option<pb::PlanHints>) -> Result<(PlanHints, ImageHints),
     Ok((hints, image))
 }
 
-/// The RGB-D frame as received; sizes and encodings are checked here, pixels by the facade.
-fn rgbd_from_proto(f: pb::RgbdFrame) -> Result<RgbdFrame, FieldError> {
+/// The RGB-D frame as received (`field` names it: `rgbd`, `extra_views[i]`); sizes and
+/// encodings are checked here, pixels by the facade.
+fn rgbd_from_proto(f: pb::RgbdFrame, field: &str) -> Result<RgbdFrame, FieldError> {
     let wire = |i: Option<pb::Image>| {
         let i = i.unwrap_or_default();
         WireImage {
@@ -515,13 +516,13 @@ fn rgbd_from_proto(f: pb::RgbdFrame) -> Result<RgbdFrame, FieldError> {
     let camera_to_world = match &f.camera_to_world {
         None => None,
         Some(p) => {
-            let field = "rgbd.camera_to_world";
+            let field = format!("{field}.camera_to_world");
             let position = point_from_proto(required(&p.position, &format!("{field}.position"))?);
             let q = required(&p.orientation, &format!("{field}.orientation"))?;
             Some(camera_pose(
                 position,
                 Quaternion::new(q.w, q.x, q.y, q.z),
-                field,
+                &field,
             )?)
         }
     };
@@ -536,7 +537,7 @@ fn rgbd_from_proto(f: pb::RgbdFrame) -> Result<RgbdFrame, FieldError> {
         },
         Some(f.depth_scale),
         camera_to_world,
-        "rgbd",
+        field,
     )
 }
 
@@ -626,7 +627,7 @@ pub fn plan_request_from_proto(
 ) -> Result<PlanRequest, ServiceError> {
     let source = match r.input {
         Some(Input::Cloud(c)) => PlanSource::Cloud(cloud_from_proto(c, limits)?),
-        Some(Input::Rgbd(f)) => PlanSource::Rgbd(Box::new(rgbd_from_proto(f)?)),
+        Some(Input::Rgbd(f)) => PlanSource::Rgbd(Box::new(rgbd_from_proto(f, "rgbd")?)),
         None => {
             return Err(FieldError::new("cloud", "give the input: a cloud (or rgbd)").into());
         }
@@ -643,8 +644,15 @@ pub fn plan_request_from_proto(
     let options = options_from_proto(r.options)?;
     let (hints, image_hints) = hints_from_proto(r.hints)?;
     let o = r.output.unwrap_or_default();
+    let extra_views = r
+        .extra_views
+        .into_iter()
+        .enumerate()
+        .map(|(i, f)| rgbd_from_proto(f, &format!("extra_views[{i}]")))
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(PlanRequest {
         source,
+        extra_views,
         hand,
         options,
         hints,
@@ -686,6 +694,7 @@ pub fn plan_request_to_proto(r: &PlanRequest) -> pb::PlanGraspRequest {
             probability_maps_max_side: r.output.probability_maps_max_side,
             overlay: r.output.overlay,
         }),
+        extra_views: r.extra_views.iter().map(rgbd_to_proto).collect(),
     }
 }
 
@@ -1024,6 +1033,8 @@ fn perception_to_proto(r: &PerceptionReport) -> pb::Perception {
         target_source: r.target_source.name().into(),
         objects: r.objects as u32,
         object_points: r.object_points as u64,
+        fused_views: r.fused_views as u32,
+        fused_points: r.fused_points as u64,
         timings: Some(pb::PerceptionTimings {
             decode: t.decode,
             saliency: t.saliency,
@@ -1087,6 +1098,8 @@ fn perception_from_proto(
         })?,
         objects: r.objects as usize,
         object_points: r.object_points as usize,
+        fused_views: r.fused_views as usize,
+        fused_points: r.fused_points as usize,
         attention_pixel,
         timings: PerceptionTimings {
             decode: t.decode,

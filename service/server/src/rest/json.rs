@@ -302,6 +302,10 @@ pub struct PlanRequestJson {
     /// RGB-D input (images as base64, or as the multipart parts `color` and `depth`).
     #[serde(default)]
     pub rgbd: Option<RgbdJson>,
+    /// Further views of the scene, each with `camera_to_world` (images as base64): what they see
+    /// of the target is added to the first view's points.
+    #[serde(default)]
+    pub extra_views: Vec<RgbdJson>,
     #[serde(default)]
     pub hand_name: Option<String>,
     #[serde(default)]
@@ -414,13 +418,17 @@ fn wire_image(img: ImageJson, part: Option<Vec<u8>>, field: &str) -> Result<Wire
     })
 }
 
-/// The frame as received; sizes and encodings are checked here, pixels by the facade.
-fn rgbd_from_json(f: RgbdJson, parts: ImageParts) -> Result<RgbdFrame, FieldError> {
-    let color = wire_image(f.color, parts.color, "rgbd.color")?;
-    let depth = wire_image(f.depth, parts.depth, "rgbd.depth")?;
-    let k = f
-        .intrinsics
-        .ok_or_else(|| FieldError::new("rgbd.intrinsics", "is required (fx, fy, cx, cy)"))?;
+/// The frame as received (`field` names it: `rgbd`, `extra_views[i]`); sizes and encodings are
+/// checked here, pixels by the facade.
+fn rgbd_from_json(f: RgbdJson, parts: ImageParts, field: &str) -> Result<RgbdFrame, FieldError> {
+    let color = wire_image(f.color, parts.color, &format!("{field}.color"))?;
+    let depth = wire_image(f.depth, parts.depth, &format!("{field}.depth"))?;
+    let k = f.intrinsics.ok_or_else(|| {
+        FieldError::new(
+            format!("{field}.intrinsics"),
+            "is required (fx, fy, cx, cy)",
+        )
+    })?;
     let camera_to_world = f
         .camera_to_world
         .map(|p| {
@@ -428,7 +436,7 @@ fn rgbd_from_json(f: RgbdJson, parts: ImageParts) -> Result<RgbdFrame, FieldErro
             camera_pose(
                 p.position.point(),
                 Quaternion::new(q.w, q.x, q.y, q.z),
-                "rgbd.camera_to_world",
+                &format!("{field}.camera_to_world"),
             )
         })
         .transpose()?;
@@ -443,7 +451,7 @@ fn rgbd_from_json(f: RgbdJson, parts: ImageParts) -> Result<RgbdFrame, FieldErro
         },
         f.depth_scale,
         camera_to_world,
-        "rgbd",
+        field,
     )
 }
 
@@ -517,7 +525,9 @@ pub fn plan_request_from_json(
                 FieldError::new("rgbd", "give either a cloud file or rgbd, not both").into(),
             );
         }
-        (None, Some(f), None) => PlanSource::Rgbd(Box::new(rgbd_from_json(f, image_parts)?)),
+        (None, Some(f), None) => {
+            PlanSource::Rgbd(Box::new(rgbd_from_json(f, image_parts, "rgbd")?))
+        }
         (Some(c), None, None) => PlanSource::Cloud(cloud_from_json(c, limits)?),
         (None, None, Some(c)) => PlanSource::Cloud(c),
         (None, None, None) => {
@@ -560,8 +570,16 @@ pub fn plan_request_from_json(
         most_salient: h.most_salient,
     };
     let o = r.output.unwrap_or_default();
+    // Further views carry their images as base64 (the multipart parts are the first view's).
+    let extra_views = r
+        .extra_views
+        .into_iter()
+        .enumerate()
+        .map(|(i, f)| rgbd_from_json(f, ImageParts::default(), &format!("extra_views[{i}]")))
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(PlanRequest {
         source,
+        extra_views,
         hand,
         options: r.options.unwrap_or_default(),
         hints,
@@ -768,6 +786,11 @@ pub struct PerceptionJson {
     pub target_source: TargetChoice,
     pub objects: usize,
     pub object_points: usize,
+    /// Further views fused (`extra_views`) and the object points they added.
+    #[serde(default)]
+    pub fused_views: usize,
+    #[serde(default)]
+    pub fused_points: usize,
     #[schema(value_type = PerceptionTimingsDoc)]
     pub timings: PerceptionTimings,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -790,6 +813,8 @@ impl From<&PerceptionReport> for PerceptionJson {
             target_source: r.target_source,
             objects: r.objects,
             object_points: r.object_points,
+            fused_views: r.fused_views,
+            fused_points: r.fused_points,
             timings: r.timings,
             probability_maps: r.probability_maps.as_ref().map(|m| ProbabilityMapsJson {
                 width: m.width,
