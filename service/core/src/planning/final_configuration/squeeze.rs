@@ -197,6 +197,9 @@ pub(super) fn squeeze_joints(
     Ok(q)
 }
 
+/// A contact (its index) and how it moves per radian of one joint (root frame).
+type ContactMotion = (usize, Vector3<f64>);
+
 /// A contact presses through its finger when the finger's flexion joints move it along its
 /// inward normal at least this much per radian (m/rad, a 1 cm lever); one they do not move
 /// (a knuckle's link beside the palm) only pushes back, like the palm.
@@ -230,7 +233,7 @@ fn balanced_squeeze(
     const H: f64 = 1e-4;
     // Per flexion joint of a taking-part finger: how each of its contacts moves per radian
     // (root frame), from finite differences.
-    let mut moves: Vec<(usize, Vec<(usize, Vector3<f64>)>)> = Vec::new();
+    let mut moves: Vec<(usize, Vec<ContactMotion>)> = Vec::new();
     let mut lever = vec![0.0; contacts.len()];
     for (f, _) in &closed.s {
         let mine: Vec<usize> = (0..contacts.len())
@@ -243,7 +246,7 @@ fn balanced_squeeze(
             let mut qh = q0.clone();
             qh[fj.joint] += H;
             let fk1 = hand.tree.forward(&qh)?;
-            let v: Vec<(usize, Vector3<f64>)> = mine
+            let v: Vec<ContactMotion> = mine
                 .iter()
                 .map(|&i| {
                     let c = &contacts[i];
