@@ -42,6 +42,9 @@ pub struct HandSummary {
     pub success_rate: f64,
     pub mean_plan_ms: f64,
     pub outcomes: BTreeMap<&'static str, usize>,
+    /// Trials whose object stayed in the hand with gravity along each of the six axis
+    /// directions ([`crate::gravity`]), of `trials`.
+    pub gravity_six: usize,
     /// The squeeze depth graspd was asked for (derived from the model, `hand.rs`), m.
     pub squeeze_depth: f64,
 }
@@ -54,7 +57,7 @@ pub struct BenchReport {
     pub trials_per_cell: usize,
     pub seed: u64,
     pub jobs: usize,
-    pub input: &'static str,
+    pub input: String,
     pub image: Intrinsics,
     pub wall_s: f64,
     pub trials_per_minute: f64,
@@ -163,9 +166,11 @@ pub fn run_bench(config: &BenchConfig, service: &Service) -> Result<BenchReport,
         seed: config.seed,
         jobs: config.jobs,
         input: if config.options.cloud_input {
-            "object point cloud"
+            "object point cloud".into()
+        } else if config.options.views > 1 {
+            format!("{} fused RGB-D views", config.options.views)
         } else {
-            "single-view RGB-D"
+            "single-view RGB-D".into()
         },
         image: config.options.intrinsics,
         wall_s,
@@ -197,7 +202,12 @@ fn summarise<'a>(hand: &SimHand, recs: impl Iterator<Item = &'a TrialRecord>) ->
     for o in Outcome::ALL {
         outcomes.insert(o.name(), recs.iter().filter(|r| r.outcome == o).count());
     }
+    let gravity_six = recs
+        .iter()
+        .filter(|r| r.gravity_held.is_some_and(|g| g.iter().all(|&h| h)))
+        .count();
     HandSummary {
+        gravity_six,
         squeeze_depth: hand.squeeze_depth,
         hand: hand.name.clone(),
         label: hand.label.clone(),
@@ -256,6 +266,19 @@ fn markdown(report: &BenchReport, hands: &[SimHand]) -> String {
         );
     }
     let _ = writeln!(s);
+    if report.records.iter().any(|r| r.gravity_held.is_some()) {
+        let _ = write!(s, "| held against gravity along ±x, ±y, ±z |");
+        for h in &report.hands {
+            let _ = write!(
+                s,
+                " {:.1} % ({}/{}) |",
+                100.0 * h.gravity_six as f64 / h.trials.max(1) as f64,
+                h.gravity_six,
+                h.trials
+            );
+        }
+        let _ = writeln!(s);
+    }
     let _ = write!(s, "| mean PlanGrasp latency |");
     for h in &report.hands {
         let _ = write!(s, " {:.0} ms |", h.mean_plan_ms);
@@ -280,6 +303,7 @@ fn markdown(report: &BenchReport, hands: &[SimHand]) -> String {
         );
     }
     let _ = writeln!(s);
+    per_type_table(&mut s, report, hands);
     let mut sources: BTreeMap<&str, usize> = BTreeMap::new();
     for r in &report.records {
         if let Some(t) = &r.type_source {
@@ -314,6 +338,54 @@ fn markdown(report: &BenchReport, hands: &[SimHand]) -> String {
         report.trials_per_minute
     );
     s
+}
+
+/// Success per grasp type (rows: the types graspd chose; columns: hands).
+fn per_type_table(s: &mut String, report: &BenchReport, hands: &[SimHand]) {
+    let mut types: Vec<&str> = report
+        .records
+        .iter()
+        .filter_map(|r| r.grasp_type.as_deref())
+        .collect();
+    types.sort_unstable();
+    types.dedup();
+    if types.is_empty() {
+        return;
+    }
+    let _ = write!(s, "\n| grasp type |");
+    for h in hands {
+        let _ = write!(s, " {} |", h.label);
+    }
+    let _ = write!(s, "\n|---|");
+    for _ in hands {
+        let _ = write!(s, "---|");
+    }
+    let _ = writeln!(s);
+    for t in types {
+        let _ = write!(s, "| {} |", t.replace('_', " "));
+        for h in hands {
+            let cell: Vec<&TrialRecord> = report
+                .records
+                .iter()
+                .filter(|r| r.hand == h.name && r.grasp_type.as_deref() == Some(t))
+                .collect();
+            if cell.is_empty() {
+                let _ = write!(s, " – |");
+                continue;
+            }
+            let ok = cell
+                .iter()
+                .filter(|r| r.outcome == Outcome::Success)
+                .count();
+            let _ = write!(
+                s,
+                " {:.0} % ({ok}/{}) |",
+                100.0 * ok as f64 / cell.len() as f64,
+                cell.len()
+            );
+        }
+        let _ = writeln!(s);
+    }
 }
 
 /// The snapshot view: from the front-left, a little above the lifted grasp.

@@ -72,6 +72,24 @@ pub fn default_view() -> Isometry3<f64> {
     )
 }
 
+/// `n` views of the benchmark's scene: `first`, and the same camera turned about the vertical
+/// through the point the default view looks at by 360°/n each — a robot's wrist camera moved
+/// around the table, or a cell with n cameras.
+pub fn views_around(first: &Isometry3<f64>, n: usize) -> Vec<Isometry3<f64>> {
+    let target = Vector3::new(0.0, 0.0, 0.05);
+    (0..n.max(1))
+        .map(|k| {
+            let turn = UnitQuaternion::from_axis_angle(
+                &Vector3::z_axis(),
+                std::f64::consts::TAU * k as f64 / n.max(1) as f64,
+            );
+            let about = Isometry3::from_parts(target.into(), turn)
+                * Isometry3::translation(-target.x, -target.y, -target.z);
+            about * first
+        })
+        .collect()
+}
+
 /// Renders the scene's current state (call `forward` first). Geoms of groups ≥ 3 (the hand
 /// models' collision geoms) are left out, so the visual meshes are what is seen.
 pub fn render(

@@ -14,7 +14,8 @@
 //! Table 5.2 (10 trials per cell, 2026-12-02, balanced squeeze), open loop → guarded: Robotiq
 //! 68 → 68, Barrett 65 → 65, Shadow 39 → 45, Allegro 56 → 55 of 80.
 
-use crate::trial::{CLOSE_S, CLOSE_SETTLE_S, Trial, debug_snapshot};
+use crate::debug;
+use crate::trial::{CLOSE_S, CLOSE_SETTLE_S, Trial};
 
 /// Per actuator, the branches of hand bodies it moves: for each top-most body one of its
 /// degrees of freedom belongs to (through its transmission: joint, tendon or gear), that body
@@ -105,7 +106,7 @@ pub fn close(trial: &mut Trial, touch: &[f64], squeeze: &[f64], guarded: bool) {
                 }
             }
         });
-        debug_snapshot(trial, phase);
+        debug::snapshot(trial, phase);
     }
     trial.run(CLOSE_SETTLE_S, |_, _| {});
 }

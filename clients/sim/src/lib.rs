@@ -5,6 +5,8 @@
 pub mod bench;
 pub mod camera;
 pub mod closing;
+mod debug;
+pub mod gravity;
 pub mod hand;
 pub mod object;
 pub mod scene;

@@ -55,6 +55,16 @@ struct Cli {
     /// graspd's detection.
     #[arg(long, global = true, value_parser = parse_grasp_type)]
     grasp_type: Option<graspd_proto::v1::GraspType>,
+    /// Half-width of the square on the table the object is placed in (any yaw), m.
+    #[arg(long, default_value_t = graspd_sim::trial::PLACE_RANGE, global = true)]
+    place_range: f64,
+    /// Views of the scene per PlanGrasp: the benchmark camera and views − 1 more around the
+    /// table, fused by graspd (`extra_views`).
+    #[arg(long, default_value_t = 1, global = true)]
+    views: usize,
+    /// Skip the six-direction gravity test after the hold.
+    #[arg(long, global = true)]
+    skip_gravity_test: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -125,7 +135,8 @@ enum Command {
 /// Which objects, how many trials each, from which seed.
 #[derive(clap::Args)]
 struct Runs {
-    /// Comma-separated objects; default: the eight of the dissertation's Table 5.2.
+    /// Comma-separated objects, or `all` (every shared object); default: the eight of the
+    /// dissertation's Table 5.2.
     #[arg(long)]
     objects: Option<String>,
     /// Trials per hand and object.
@@ -147,15 +158,12 @@ fn split_names(s: &str) -> Vec<String> {
 
 impl Runs {
     fn objects(&self) -> Vec<String> {
-        self.objects.as_deref().map_or_else(
-            || {
-                graspd_sim::object::TABLE_5_2
-                    .iter()
-                    .map(|s| s.to_string())
-                    .collect()
-            },
-            split_names,
-        )
+        let named = |list: &[&str]| list.iter().map(|s| s.to_string()).collect();
+        match self.objects.as_deref() {
+            None => named(&graspd_sim::object::TABLE_5_2),
+            Some("all") => named(&graspd_sim::object::ALL_SHARED),
+            Some(s) => split_names(s),
+        }
     }
 }
 
@@ -199,13 +207,16 @@ fn real_main() -> Result<(), SimError> {
         guarded_close: !cli.open_loop,
         candidate: cli.candidate,
         grasp_type: cli.grasp_type,
+        place_range: cli.place_range,
+        views: cli.views,
+        gravity_test: !cli.skip_gravity_test,
     };
     match cli.command {
         Command::Trial { hand, object, seed } => {
             let hand = SimHand::load(&hand, &hands_dir)?;
             service.ensure_hand(&hand)?;
             let obj = SimObject::load(&objects_dir, &object)?;
-            let p = placement(seed);
+            let p = placement(seed, opts.place_range);
             let scene = Scene::build(
                 &hand,
                 &[(&obj, graspd_sim::scene::on_table(p[0], p[1], p[2]))],

@@ -21,6 +21,24 @@ pub const TABLE_5_2: [&str; 8] = [
     "orange",
 ];
 
+/// Every object in ../shared/testdata/objects: Table 5.2's eight and five more (two boxes of
+/// food, two small boxes, a large can), for `--objects all`.
+pub const ALL_SHARED: [&str; 13] = [
+    "chips_can",
+    "tomato_soup_can",
+    "tuna_fish_can",
+    "potted_meat_can",
+    "mustard_bottle",
+    "banana",
+    "apple",
+    "orange",
+    "master_chef_can",
+    "cracker_box",
+    "sugar_box",
+    "pudding_box",
+    "gelatin_box",
+];
+
 /// One convex piece: its vertices in the object frame, m.
 pub type Piece = Vec<Point3<f64>>;
 

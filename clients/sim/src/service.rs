@@ -88,17 +88,18 @@ impl Service {
         Ok(true)
     }
 
-    /// PlanGrasp on a rendered frame (or the object's cloud when `cloud` is given).
+    /// PlanGrasp on a rendered frame (or the object's cloud when `cloud` is given), with further
+    /// views of the scene fused (`extra_views`, RGB-D input only).
     pub fn plan(
         &self,
         hand: &SimHand,
         image: &RgbdImage,
+        extra_views: &[RgbdImage],
         cloud: Option<&[Point3<f64>]>,
         seed: u64,
         ask: PlanAsk,
     ) -> Result<PlanResult, tonic::Status> {
         let mut c = self.client.clone();
-        let intr = image.intrinsics;
         let input = match cloud {
             Some(points) => {
                 let mut bytes = Vec::with_capacity(points.len() * 12);
@@ -113,30 +114,7 @@ impl Service {
                     frame_id: "world".into(),
                 })
             }
-            None => pb::plan_grasp_request::Input::Rgbd(pb::RgbdFrame {
-                color: Some(pb::Image {
-                    width: intr.width,
-                    height: intr.height,
-                    encoding: "rgb8".into(),
-                    step: intr.width * 3,
-                    data: image.rgb.clone(),
-                }),
-                depth: Some(pb::Image {
-                    width: intr.width,
-                    height: intr.height,
-                    encoding: "32FC1".into(),
-                    step: intr.width * 4,
-                    data: image.depth.iter().flat_map(|d| d.to_le_bytes()).collect(),
-                }),
-                intrinsics: Some(pb::CameraIntrinsics {
-                    fx: intr.fx,
-                    fy: intr.fy,
-                    cx: intr.cx,
-                    cy: intr.cy,
-                }),
-                depth_scale: 1.0,
-                camera_to_world: Some(pose_to_proto(&image.camera_to_world)),
-            }),
+            None => pb::plan_grasp_request::Input::Rgbd(frame_to_proto(image)),
         };
         let eye = image.camera_to_world.translation.vector;
         let req = pb::PlanGraspRequest {
@@ -150,6 +128,7 @@ impl Service {
                 candidates: (ask.candidates > 0).then_some(ask.candidates),
                 ..Default::default()
             }),
+            extra_views: extra_views.iter().map(frame_to_proto).collect(),
             hints: Some(pb::PlanHints {
                 viewpoint: cloud.map(|_| pb::Vec3 {
                     x: eye.x,
@@ -167,6 +146,36 @@ impl Service {
             response,
             latency: t0.elapsed().as_secs_f64(),
         })
+    }
+}
+
+/// A rendered frame as PlanGrasp takes it (colour rgb8, depth 32FC1 in metres, the camera's
+/// pose in the world).
+fn frame_to_proto(image: &RgbdImage) -> pb::RgbdFrame {
+    let intr = image.intrinsics;
+    pb::RgbdFrame {
+        color: Some(pb::Image {
+            width: intr.width,
+            height: intr.height,
+            encoding: "rgb8".into(),
+            step: intr.width * 3,
+            data: image.rgb.clone(),
+        }),
+        depth: Some(pb::Image {
+            width: intr.width,
+            height: intr.height,
+            encoding: "32FC1".into(),
+            step: intr.width * 4,
+            data: image.depth.iter().flat_map(|d| d.to_le_bytes()).collect(),
+        }),
+        intrinsics: Some(pb::CameraIntrinsics {
+            fx: intr.fx,
+            fy: intr.fy,
+            cx: intr.cx,
+            cy: intr.cy,
+        }),
+        depth_scale: 1.0,
+        camera_to_world: Some(pose_to_proto(&image.camera_to_world)),
     }
 }
 

@@ -256,7 +256,8 @@ pub fn run_disturbance_trial(
         )));
     }
     let mu = hand.pad_friction.unwrap_or(0.6);
-    let place = placement(seed);
+    // The closed-loop run keeps its measured placements (±5 cm).
+    let place = placement(seed, 0.05);
     let mut trial = Trial::new(scene, place);
     let start = trial.object_position();
     let mass = scene.model.body_mass()[scene.object_bodies[0]];
@@ -276,7 +277,7 @@ pub fn run_disturbance_trial(
         slid_mm: 0.0,
     };
     let image = trial.render(opts.intrinsics, opts.camera);
-    let plan = match service.plan(hand, &image, None, seed, Default::default()) {
+    let plan = match service.plan(hand, &image, &[], None, seed, Default::default()) {
         Ok(p) => p,
         Err(s) => {
             out.detail = format!("no plan: {}", s.message());

@@ -2,7 +2,8 @@
 //! with the outcome classified.
 //!
 //! Protocol (all in simulated time, 2 ms steps):
-//! 1. the object is dropped 1 mm above the table at a seeded random spot (±[`PLACE_RANGE`]) and
+//! 1. the object is dropped 1 mm above the table at a seeded random spot (±`place_range`,
+//!    default [`PLACE_RANGE`]) and
 //!    yaw, and settles for 0.3 s while the hand is parked out of view;
 //! 2. the camera renders the scene and graspd plans on the frame (or on the object's cloud);
 //! 3. the base jumps to the pre-grasp pose (`pregrasp_pose × hand_pose⁻¹ × root_pose`) with every
@@ -30,6 +31,7 @@
 //! the object), `slipped_lift` (not lifted, or lost during the lift or the hold), `dropped_shake`.
 
 use crate::camera::{self, Intrinsics, RgbdImage};
+use crate::debug;
 use crate::hand::SimHand;
 use crate::scene::{PARKED, Scene, from_mj, on_table, to_mj};
 use crate::service::{PlanAsk, PlanResult, Service, grasp_type_name, pose_from_proto};
@@ -38,7 +40,8 @@ use nalgebra::{Isometry3, Point3, Vector3};
 use rand::{RngExt, SeedableRng};
 use serde::Serialize;
 
-pub const PLACE_RANGE: f64 = 0.05;
+/// Default half-width of the square the object is placed in, m (issue 15: ±10 cm).
+pub const PLACE_RANGE: f64 = 0.10;
 pub const SETTLE_S: f64 = 0.3;
 pub const PRESHAPE_S: f64 = 0.3;
 pub const APPROACH_S: f64 = 0.6;
@@ -108,6 +111,13 @@ pub struct TrialOptions {
     pub candidate: usize,
     /// Force this grasp type instead of graspd's detection.
     pub grasp_type: Option<graspd_proto::v1::GraspType>,
+    /// Half-width of the square the object is placed in, m.
+    pub place_range: f64,
+    /// Views of the scene sent with each PlanGrasp (RGB-D input): the camera, and `views − 1`
+    /// more turned about the table's vertical (`camera::views_around`), fused by graspd.
+    pub views: usize,
+    /// Run the six-direction gravity test after the hold ([`crate::gravity`]).
+    pub gravity_test: bool,
 }
 
 /// What one trial did.
@@ -151,6 +161,9 @@ pub struct TrialRecord {
     pub moved_close_mm: Option<f64>,
     pub turned_close_deg: Option<f64>,
     pub touching_bodies: Vec<String>,
+    /// The six-direction gravity test ([`crate::gravity`], order ±x, ±y, ±z): whether each
+    /// direction held; None when the object was not held after the hold or the test was off.
+    pub gravity_held: Option<[bool; 6]>,
     /// Object placement (x, y, yaw).
     pub placement: [f64; 3],
     /// The snapshot after the hold (when asked for and the object got that far).
@@ -190,6 +203,7 @@ impl TrialRecord {
             moved_close_mm: None,
             turned_close_deg: None,
             touching_bodies: Vec::new(),
+            gravity_held: None,
             placement: place,
             snapshot: None,
         }
@@ -202,12 +216,13 @@ pub struct Trial<'a> {
     pub data: MjData<&'a MjModel>,
 }
 
-/// The seeded object placement: (x, y, yaw).
-pub fn placement(seed: u64) -> [f64; 3] {
+/// The seeded object placement within ±`range` m: (x, y, yaw).
+pub fn placement(seed: u64, range: f64) -> [f64; 3] {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x9e37_79b9_7f4a_7c15);
+    let range = range.max(1e-6);
     [
-        rng.random_range(-PLACE_RANGE..PLACE_RANGE),
-        rng.random_range(-PLACE_RANGE..PLACE_RANGE),
+        rng.random_range(-range..range),
+        rng.random_range(-range..range),
         rng.random_range(-std::f64::consts::PI..std::f64::consts::PI),
     ]
 }
@@ -430,13 +445,22 @@ pub fn run_trial(
     seed: u64,
     opts: &TrialOptions,
 ) -> TrialRecord {
-    let place = placement(seed);
+    let place = placement(seed, opts.place_range);
     let mut rec = TrialRecord::empty(hand, object, seed, place);
     let t_sim = std::time::Instant::now();
     let mut trial = Trial::new(scene, place);
     let start = trial.object_position();
     let t_render = std::time::Instant::now();
     let image = trial.render(opts.intrinsics, opts.camera);
+    let extra: Vec<RgbdImage> = if opts.cloud_input {
+        Vec::new()
+    } else {
+        camera::views_around(&opts.camera, opts.views)
+            .iter()
+            .skip(1)
+            .map(|v| trial.render(opts.intrinsics, *v))
+            .collect()
+    };
     let cloud = opts.cloud_input.then(|| {
         let obj = scene.object_bodies[0];
         image.points_of(|g| scene.model.geom_bodyid()[g] as usize == obj)
@@ -453,13 +477,14 @@ pub fn run_trial(
         },
         grasp_type: opts.grasp_type,
     };
-    let mut plan = service.plan(hand, &image, cloud.as_deref(), seed, ask);
+    let mut plan = service.plan(hand, &image, &extra, cloud.as_deref(), seed, ask);
     let mut attempts = 1;
     let mut extra_ms = 0.0;
     while attempts <= opts.replans && matches!(&plan, Ok(p) if !p.response.feasible) {
         let again = service.plan(
             hand,
             &image,
+            &extra,
             cloud.as_deref(),
             seed + 1000 * attempts as u64,
             ask,
@@ -583,8 +608,8 @@ pub fn pre_grasp_and_approach(
             trial.place_base(&root);
             trial.set_hand_joints(q);
             trial.data.forward();
-            debug_penetration(trial, name);
-            debug_snapshot(trial, name);
+            debug::penetration(trial, name);
+            debug::snapshot(trial, name);
         }
         trial.data.qpos_mut().copy_from_slice(&saved);
         trial.data.forward();
@@ -598,13 +623,13 @@ pub fn pre_grasp_and_approach(
     trial.place_base(&pre_root);
     trial.data.forward();
     trial.run(PRESHAPE_S, |_, _| {});
-    debug_snapshot(trial, "pregrasp");
+    debug::snapshot(trial, "pregrasp");
     // Approach along the straight line.
     trial.run(APPROACH_S, |t, f| {
         let p = pre_root.lerp_slerp(&root, f);
         t.set_base(&p);
     });
-    debug_snapshot(trial, "approached");
+    debug::snapshot(trial, "approached");
     let through = trial.deepest_table_penetration();
     if through > TABLE_PENETRATION_M {
         rec.detail = format!("the hand went {:.0} mm into the table", through * 1e3);
@@ -644,8 +669,8 @@ fn execute(
     // Close (crate::closing): guarded unless the options ask for the open loop.
     let (before_p, before_q) = (trial.object_position(), trial.object_orientation());
     crate::closing::close(trial, &grasp, &closed, opts.guarded_close);
-    debug_snapshot(trial, "closed");
-    debug_forces(trial, "closed", &grasp, &closed);
+    debug::snapshot(trial, "closed");
+    debug::forces(trial, "closed", &grasp, &closed);
     let touching = trial.hand_bodies_touching();
     rec.contact_bodies = Some(touching);
     rec.moved_close_mm = Some((trial.object_position() - before_p).norm() * 1e3);
@@ -660,7 +685,7 @@ fn execute(
         let up = nalgebra::Translation3::new(0.0, 0.0, LIFT_M * smooth(f));
         t.set_base(&(up * root));
     });
-    debug_snapshot(trial, "lifted");
+    debug::snapshot(trial, "lifted");
     let height = |t: &Trial| t.object_com().z - start_com.z;
     rec.lift_height = Some(height(trial));
     let lifted = nalgebra::Translation3::new(0.0, 0.0, LIFT_M) * root;
@@ -680,6 +705,9 @@ fn execute(
         );
         return Outcome::SlippedLift;
     }
+    if opts.gravity_test {
+        rec.gravity_held = Some(crate::gravity::six_directions(trial));
+    }
     // Shake.
     let dir = Vector3::new(1.0, 1.0, 0.5).normalize();
     trial.run(SHAKE_S, |t, f| {
@@ -698,105 +726,6 @@ fn execute(
         return Outcome::DroppedShake;
     }
     Outcome::Success
-}
-
-/// With GRASPD_SIM_DEBUG_DIR set, saves a picture of each phase there (for looking at a trial):
-/// two views of the object, from the front left and from the right, far enough to see a tall
-/// object's top and the hand above it.
-pub(crate) fn debug_snapshot(trial: &mut Trial, phase: &str) {
-    if let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") {
-        let o = trial.object_position() + Vector3::new(0.0, 0.0, 0.09);
-        let mut imgs = Vec::new();
-        for eye in [
-            Vector3::new(-0.35, -0.32, 0.26),
-            Vector3::new(0.4, -0.2, 0.3),
-        ] {
-            let view = camera::look_at(o + eye, o);
-            imgs.push(trial.render(Intrinsics::kinect(360, 270), view));
-        }
-        let (w, h) = (imgs[0].intrinsics.width, imgs[0].intrinsics.height);
-        let mut rgb = Vec::with_capacity(imgs[0].rgb.len() * 2);
-        for row in 0..h as usize {
-            for img in &imgs {
-                let stride = 3 * w as usize;
-                rgb.extend_from_slice(&img.rgb[row * stride..(row + 1) * stride]);
-            }
-        }
-        let _ = image::save_buffer(
-            std::path::Path::new(&dir).join(format!("{phase}.png")),
-            &rgb,
-            2 * w,
-            h,
-            image::ExtendedColorType::Rgb8,
-        );
-    }
-}
-
-/// With GRASPD_SIM_DEBUG_DIR set, appends the hand's normal force on the object, each
-/// actuator's command at the touch and at the squeeze, position and force to `forces.txt` (for
-/// looking at a grip).
-fn debug_forces(trial: &Trial, phase: &str, touch: &[f64], target: &[f64]) {
-    let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") else {
-        return;
-    };
-    let m = &trial.scene.model;
-    let mut normal = 0.0;
-    let mut per_body: std::collections::BTreeMap<String, f64> = Default::default();
-    for (i, other) in trial.hand_contacts_with_object() {
-        let f = trial.data.contact_force(i)[0].max(0.0);
-        normal += f;
-        let name = m
-            .id_to_name(MjtObjBase::mjOBJ_BODY, other)
-            .unwrap_or_default()
-            .to_string();
-        *per_body.entry(name).or_default() += f;
-    }
-    let mut text = format!("{phase}: normal force on the object {normal:.2} N\n");
-    for (b, f) in &per_body {
-        text += &format!("  {b}: {f:.2} N\n");
-    }
-    let nu = m.ffi().nu as usize;
-    let len = trial.data.actuator_length();
-    let force = trial.data.actuator_force();
-    for a in 0..nu {
-        let name = m
-            .id_to_name(MjtObjBase::mjOBJ_ACTUATOR, a)
-            .unwrap_or_default();
-        text += &format!(
-            "  {name}: touch {:.3} target {:.3} length {:.3} force {:.3}\n",
-            touch[a], target[a], len[a], force[a]
-        );
-    }
-    let path = std::path::Path::new(&dir).join("forces.txt");
-    let old = std::fs::read_to_string(&path).unwrap_or_default();
-    let _ = std::fs::write(path, old + &text);
-}
-
-/// With GRASPD_SIM_DEBUG_DIR set, appends how deep each hand body is in the object at the
-/// current (kinematically posed) state to `forces.txt`: how far the plan's touch and squeeze
-/// are from the true surface.
-fn debug_penetration(trial: &Trial, phase: &str) {
-    let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") else {
-        return;
-    };
-    let m = &trial.scene.model;
-    let mut deepest: std::collections::BTreeMap<String, f64> = Default::default();
-    for (i, other) in trial.hand_contacts_with_object() {
-        let d = -trial.data.contact()[i].dist;
-        let name = m
-            .id_to_name(MjtObjBase::mjOBJ_BODY, other)
-            .unwrap_or_default()
-            .to_string();
-        let e = deepest.entry(name).or_insert(f64::NEG_INFINITY);
-        *e = e.max(d);
-    }
-    let mut text = format!("{phase} (posed): depth in the true object per hand body\n");
-    for (b, d) in &deepest {
-        text += &format!("  {b}: {:.1} mm\n", d * 1e3);
-    }
-    let path = std::path::Path::new(&dir).join("forces.txt");
-    let old = std::fs::read_to_string(&path).unwrap_or_default();
-    let _ = std::fs::write(path, old + &text);
 }
 
 /// Smoothstep 0 → 1 (zero velocity at both ends).

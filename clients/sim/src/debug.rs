@@ -1,0 +1,106 @@
+//! What `GRASPD_SIM_DEBUG_DIR=DIR` saves of a trial, for looking at it: a picture of each
+//! phase, the plan's posed depth in the true object and the grip after the close.
+
+use crate::camera::{self, Intrinsics};
+use crate::trial::Trial;
+use mujoco_rs::prelude::*;
+use nalgebra::Vector3;
+
+/// With GRASPD_SIM_DEBUG_DIR set, saves a picture of each phase there (for looking at a trial):
+/// two views of the object, from the front left and from the right, far enough to see a tall
+/// object's top and the hand above it.
+pub(crate) fn snapshot(trial: &mut Trial, phase: &str) {
+    if let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") {
+        let o = trial.object_position() + Vector3::new(0.0, 0.0, 0.09);
+        let mut imgs = Vec::new();
+        for eye in [
+            Vector3::new(-0.35, -0.32, 0.26),
+            Vector3::new(0.4, -0.2, 0.3),
+        ] {
+            let view = camera::look_at(o + eye, o);
+            imgs.push(trial.render(Intrinsics::kinect(360, 270), view));
+        }
+        let (w, h) = (imgs[0].intrinsics.width, imgs[0].intrinsics.height);
+        let mut rgb = Vec::with_capacity(imgs[0].rgb.len() * 2);
+        for row in 0..h as usize {
+            for img in &imgs {
+                let stride = 3 * w as usize;
+                rgb.extend_from_slice(&img.rgb[row * stride..(row + 1) * stride]);
+            }
+        }
+        let _ = image::save_buffer(
+            std::path::Path::new(&dir).join(format!("{phase}.png")),
+            &rgb,
+            2 * w,
+            h,
+            image::ExtendedColorType::Rgb8,
+        );
+    }
+}
+
+/// With GRASPD_SIM_DEBUG_DIR set, appends the hand's normal force on the object, each
+/// actuator's command at the touch and at the squeeze, position and force to `forces.txt` (for
+/// looking at a grip).
+pub(crate) fn forces(trial: &Trial, phase: &str, touch: &[f64], target: &[f64]) {
+    let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") else {
+        return;
+    };
+    let m = &trial.scene.model;
+    let mut normal = 0.0;
+    let mut per_body: std::collections::BTreeMap<String, f64> = Default::default();
+    for (i, other) in trial.hand_contacts_with_object() {
+        let f = trial.data.contact_force(i)[0].max(0.0);
+        normal += f;
+        let name = m
+            .id_to_name(MjtObjBase::mjOBJ_BODY, other)
+            .unwrap_or_default()
+            .to_string();
+        *per_body.entry(name).or_default() += f;
+    }
+    let mut text = format!("{phase}: normal force on the object {normal:.2} N\n");
+    for (b, f) in &per_body {
+        text += &format!("  {b}: {f:.2} N\n");
+    }
+    let nu = m.ffi().nu as usize;
+    let len = trial.data.actuator_length();
+    let force = trial.data.actuator_force();
+    for a in 0..nu {
+        let name = m
+            .id_to_name(MjtObjBase::mjOBJ_ACTUATOR, a)
+            .unwrap_or_default();
+        text += &format!(
+            "  {name}: touch {:.3} target {:.3} length {:.3} force {:.3}\n",
+            touch[a], target[a], len[a], force[a]
+        );
+    }
+    let path = std::path::Path::new(&dir).join("forces.txt");
+    let old = std::fs::read_to_string(&path).unwrap_or_default();
+    let _ = std::fs::write(path, old + &text);
+}
+
+/// With GRASPD_SIM_DEBUG_DIR set, appends how deep each hand body is in the object at the
+/// current (kinematically posed) state to `forces.txt`: how far the plan's touch and squeeze
+/// are from the true surface.
+pub(crate) fn penetration(trial: &Trial, phase: &str) {
+    let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") else {
+        return;
+    };
+    let m = &trial.scene.model;
+    let mut deepest: std::collections::BTreeMap<String, f64> = Default::default();
+    for (i, other) in trial.hand_contacts_with_object() {
+        let d = -trial.data.contact()[i].dist;
+        let name = m
+            .id_to_name(MjtObjBase::mjOBJ_BODY, other)
+            .unwrap_or_default()
+            .to_string();
+        let e = deepest.entry(name).or_insert(f64::NEG_INFINITY);
+        *e = e.max(d);
+    }
+    let mut text = format!("{phase} (posed): depth in the true object per hand body\n");
+    for (b, d) in &deepest {
+        text += &format!("  {b}: {:.1} mm\n", d * 1e3);
+    }
+    let path = std::path::Path::new(&dir).join("forces.txt");
+    let old = std::fs::read_to_string(&path).unwrap_or_default();
+    let _ = std::fs::write(path, old + &text);
+}
