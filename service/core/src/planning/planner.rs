@@ -3,7 +3,7 @@
 
 use super::dual_stage::{self, SearchOutcome};
 use super::ferrari_canny::{WrenchModel, ferrari_canny};
-use super::final_configuration::{self, FinalConfiguration};
+use super::final_configuration::{self, FIRM_ROBUSTNESS, FinalConfiguration};
 use super::kinematic_model::KinematicModel;
 use super::object_shape::ObjectShape;
 use super::quality::ContactPoint;
@@ -224,9 +224,9 @@ fn argmax_type(p: &[f64; 6], among: &[GraspType]) -> GraspType {
         .unwrap_or(GraspType::Pinch)
 }
 
-/// A hand with kinematics stops trying other grasp types once the best plan of one is
-/// feasible and resists this much (robustness, per unit grip force per contact).
-const FIRM_ROBUSTNESS: f64 = 0.5;
+/// How much more robust another grasp type's best plan must be to replace the detected type's
+/// (both feasible): the detector saw the object, the robustness figure only the contacts.
+const DETECTED_TYPE_MARGIN: f64 = 1.25;
 /// Most grasp types tried for one request.
 const MAX_TYPES: usize = 3;
 
@@ -468,6 +468,13 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
                 let firm = finals
                     .first()
                     .is_some_and(|f| f.feasible && f.robustness.weakest >= FIRM_ROBUSTNESS);
+                tracing::debug!(
+                    grasp_type = %g.grasp_type,
+                    feasible = finals.first().is_some_and(|f| f.feasible),
+                    robustness = finals.first().map(|f| f.robustness.weakest),
+                    firm,
+                    "grasp type tried"
+                );
                 tried.push(TypeAttempt {
                     grasp: g,
                     oppositions,
@@ -480,11 +487,14 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
                 }
             }
             let Some(best) = (0..tried.len()).max_by(|&a, &b| {
+                // Feasible first, then the more robust; the detected type keeps its place
+                // unless another is DETECTED_TYPE_MARGIN times as robust.
                 let key = |k: usize| {
                     let f = tried[k].finals.first();
+                    let margin = if k == 0 { DETECTED_TYPE_MARGIN } else { 1.0 };
                     (
                         f.is_some_and(|f| f.feasible),
-                        f.map_or(f64::NEG_INFINITY, |f| f.robustness.weakest),
+                        f.map_or(f64::NEG_INFINITY, |f| f.robustness.weakest * margin),
                         // Ties (no final at all): the earlier, more probable type.
                         -(k as f64),
                     )

@@ -83,7 +83,8 @@ pub struct PlannerOptions {
     /// Hand with kinematics: how far the squeeze presses each contact into the object along its
     /// normal, m.
     pub squeeze_depth: f64,
-    /// Hand with kinematics: most candidate configurations judged (placed, closed, squeezed).
+    /// Hand with kinematics: most candidate configurations judged (placed, closed, squeezed);
+    /// while none is feasible the search goes on, up to three times as many.
     pub final_candidates: usize,
 }
 
