@@ -9,6 +9,7 @@ mod debug;
 pub mod gravity;
 pub mod hand;
 pub mod object;
+pub mod record;
 pub mod scene;
 pub mod service;
 pub mod tactile;

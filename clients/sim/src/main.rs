@@ -158,10 +158,11 @@ fn split_names(s: &str) -> Vec<String> {
 
 impl Runs {
     fn objects(&self) -> Vec<String> {
+        use graspd_sim::object::{BEYOND_TABLE_5_2, TABLE_5_2};
         let named = |list: &[&str]| list.iter().map(|s| s.to_string()).collect();
         match self.objects.as_deref() {
-            None => named(&graspd_sim::object::TABLE_5_2),
-            Some("all") => named(&graspd_sim::object::ALL_SHARED),
+            None => named(&TABLE_5_2),
+            Some("all") => named(&[TABLE_5_2.as_slice(), &BEYOND_TABLE_5_2].concat()),
             Some(s) => split_names(s),
         }
     }

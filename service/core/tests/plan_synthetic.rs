@@ -125,7 +125,7 @@ fn every_builtin_hand_plans_on_a_can_and_a_sphere() {
             assert!(plan.collision.clear);
             assert!(plan.collision.min_plane_clearance.unwrap() > -0.001);
             // Seen contacts are cloud points; contacts on the unseen side lie on the true
-            // surface, since mirror completion rebuilds a symmetric object's far side.
+            // surface, since the completion rebuilds a symmetric object's far side.
             for c in &plan.contacts {
                 if c.inferred {
                     assert!(c.point_index < pts.len());

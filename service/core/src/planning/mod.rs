@@ -15,6 +15,7 @@ pub mod quality;
 pub mod robustness;
 pub mod search_context;
 pub mod slot_set;
+pub mod type_choice;
 pub mod type_rule;
 pub mod types;
 

@@ -3,11 +3,12 @@
 
 use super::dual_stage::{self, SearchOutcome};
 use super::ferrari_canny::{WrenchModel, ferrari_canny};
-use super::final_configuration::{self, FIRM_ROBUSTNESS, FinalConfiguration};
+use super::final_configuration::{self, FinalConfiguration};
 use super::kinematic_model::KinematicModel;
 use super::object_shape::ObjectShape;
 use super::quality::ContactPoint;
 use super::search_context::SearchContext;
+use super::type_choice::{self, TypeAttempt, plausible_types};
 use super::type_rule;
 use super::types::*;
 use crate::cloud::{
@@ -115,7 +116,7 @@ struct Scene {
     points: Vec<Point3<f64>>,
     normals: Option<Vec<Vector3<f64>>>,
     /// Index of each kept point in the request's cloud (for a completed point: the one it
-    /// mirrors).
+    /// completes).
     original: Vec<usize>,
     /// How many of `points` were seen (the rest complete the unseen side).
     visible: usize,
@@ -222,54 +223,6 @@ fn argmax_type(p: &[f64; 6], among: &[GraspType]) -> GraspType {
             _ => Some(t),
         })
         .unwrap_or(GraspType::Pinch)
-}
-
-/// How much more robust another grasp type's best plan must be to replace the detected type's
-/// (both feasible): the detector saw the object, the robustness figure only the contacts.
-const DETECTED_TYPE_MARGIN: f64 = 1.25;
-/// Most grasp types tried for one request.
-const MAX_TYPES: usize = 3;
-
-/// One grasp type's search (kinematic hands).
-struct TypeAttempt {
-    grasp: ResolvedGrasp,
-    oppositions: Vec<(usize, usize)>,
-    finals: Vec<FinalConfiguration>,
-    stats: (StageStats, StageStats, bool, Option<String>),
-    started: Instant,
-}
-
-/// The grasp types a kinematic hand tries (at most [`MAX_TYPES`]): the detected one, then the
-/// others it realises, most probable first (`scores`, the detector's P(s|O), or the
-/// dissertation's order when they tie), skipping those that resolve to the same fingers and
-/// family as one already listed.
-fn plausible_types(
-    hand: &HandDescription,
-    detected: &ResolvedGrasp,
-    scores: &[f64; 6],
-) -> Vec<ResolvedGrasp> {
-    let family = |g: &ResolvedGrasp| {
-        (
-            g.h1_fingers.clone(),
-            g.h2_fingers.clone(),
-            g.h1_part,
-            g.grasp_type.is_power(),
-        )
-    };
-    let mut order = hand.realisable_types();
-    order.sort_by(|a, b| scores[b.index()].total_cmp(&scores[a.index()]));
-    let mut out = vec![detected.clone()];
-    for t in order {
-        if out.len() >= MAX_TYPES {
-            break;
-        }
-        if let Some(g) = hand.resolve_forced(t)
-            && !out.iter().any(|o| family(o) == family(&g))
-        {
-            out.push(g);
-        }
-    }
-    out
 }
 
 /// Plans a grasp (Algorithm 4). Deterministic for a given input and seed.
@@ -465,44 +418,20 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
                     seconds: t.elapsed().as_secs_f64(),
                     ..Default::default()
                 };
-                let firm = finals
-                    .first()
-                    .is_some_and(|f| f.feasible && f.robustness.weakest >= FIRM_ROBUSTNESS);
-                tracing::debug!(
-                    grasp_type = %g.grasp_type,
-                    feasible = finals.first().is_some_and(|f| f.feasible),
-                    robustness = finals.first().map(|f| f.robustness.weakest),
-                    firm,
-                    "grasp type tried"
-                );
-                tried.push(TypeAttempt {
+                let attempt = TypeAttempt {
                     grasp: g,
                     oppositions,
                     finals,
                     stats: (s1, s2, ok, reason),
                     started: t,
-                });
+                };
+                let firm = attempt.firm();
+                tried.push(attempt);
                 if firm {
                     break;
                 }
             }
-            let Some(best) = (0..tried.len()).max_by(|&a, &b| {
-                // Feasible first, then the more robust; the detected type keeps its place
-                // unless another is DETECTED_TYPE_MARGIN times as robust.
-                let key = |k: usize| {
-                    let f = tried[k].finals.first();
-                    let margin = if k == 0 { DETECTED_TYPE_MARGIN } else { 1.0 };
-                    (
-                        f.is_some_and(|f| f.feasible),
-                        f.map_or(f64::NEG_INFINITY, |f| f.robustness.weakest * margin),
-                        // Ties (no final at all): the earlier, more probable type.
-                        -(k as f64),
-                    )
-                };
-                key(a)
-                    .partial_cmp(&key(b))
-                    .unwrap_or(std::cmp::Ordering::Equal)
-            }) else {
+            let Some(best) = type_choice::best(&tried) else {
                 return Err(no_contacts().into());
             };
             let chosen = tried.swap_remove(best);

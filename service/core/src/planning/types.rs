@@ -75,7 +75,7 @@ pub struct PlannerOptions {
     /// Largest distance of the grasp centre from the object's estimated centre, perpendicular to
     /// the approach, as a fraction of the object's radius (S ignores where the mass is).
     pub max_center_offset: f64,
-    /// Complete a single view's unseen side by mirror symmetry (`cloud::completion`) when the
+    /// Complete a single view's unseen side by symmetry (`cloud::completion`) when the
     /// viewpoint and the up direction are known.
     pub complete_unseen: bool,
     /// Plans returned in `candidates`: the best this many distinct ones, ranked.
@@ -190,7 +190,7 @@ pub struct Contact {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ik_residual: Option<f64>,
     /// The contact lies on the completed, unseen side (`point_index` is then the visible point
-    /// it mirrors).
+    /// it completes).
     #[serde(default)]
     pub inferred: bool,
     /// For a hand with known kinematics: the body (link) of the model that touches.

@@ -4,7 +4,7 @@
 //!
 //! 1. **Place** ([`placement`]): the pre-shape's grasp frame on the opposition, turned about it to
 //!    each approach to try, the pre-shaped hand moved in along the approach from the pre-grasp
-//!    distance until it would touch the object (the visible points and their mirror completion)
+//!    distance until it would touch the object (the visible points and their completion)
 //!    or the table — so proposals are clear of both by construction.
 //! 2. **Close** ([`closing_sweep`]): the taking-part fingers close along the synergy until their
 //!    links touch; fingers that take no part keep the posture (open, or curled) that let the
@@ -19,12 +19,15 @@
 //!    [`MAX_PUSH`]; ranked by the force at the estimated centre of mass the contacts resist in
 //!    their weakest direction ([`super::robustness`]), then by Q of Eq 5.2.
 //!
-//! Candidates: up to four stage-1 oppositions × the approach preferences (−n_att, the rule's
-//! approach, −up, −z; each made perpendicular to the opposition) × turns of 0, ±30° and ±60°
-//! about the opposition line, in that order of preference; at most
-//! `options.final_candidates` are judged. Deterministic: no clock decides anything.
+//! Candidates ([`order`]): up to four stage-1 oppositions and the best moved to the height of
+//! the estimated centre of mass × the approach preferences (−n_att, the rule's approach, −up,
+//! −z; each made perpendicular to the opposition) × turns of 0, ±30° and ±60° about the
+//! opposition line, in that order of preference; at most `options.final_candidates` are
+//! judged, up to [`WIDENING`] times as many while none is feasible. Deterministic: no clock
+//! decides anything.
 
 pub mod closing_sweep;
+mod order;
 pub mod placement;
 mod pregrasp;
 mod squeeze;
@@ -38,6 +41,7 @@ use crate::error::FieldError;
 use crate::hand::kinematics::PreShape;
 use closing_sweep::{SweepContact, SweepHand, close_fingers, patch};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use order::candidate_order;
 use pregrasp::{advance_contacts, joints_at};
 use squeeze::squeeze_joints;
 
@@ -45,24 +49,21 @@ use squeeze::squeeze_joints;
 pub const MAX_PUSH: f64 = 0.015;
 /// Openings beyond the opposition's width that fingertip pre-shapes try, m (then fully open).
 pub const PRESHAPE_MARGINS: [f64; 3] = [0.03, 0.06, 0.1];
-/// While no candidate is feasible and firm the search judges up to this many times
+/// While no candidate is feasible the search judges up to this many times
 /// `options.final_candidates`.
 const WIDENING: usize = 3;
 /// A feasible grasp this robust (resisted force at the centre of mass per unit grip force per
-/// contact, weakest direction) is firm: the search widens, and a kinematic hand tries further
-/// grasp types, only while none is. Measured on the Table 5.2 run (20 trials per cell): the
-/// quarter of executed plans below 0.4–0.6 held 2–42 % of the time, the quarter above
-/// 0.7–1.7 held 90–100 %.
+/// contact, weakest direction) is firm: a kinematic hand tries further grasp types only while
+/// none is. Measured on the Table 5.2 run (20 trials per cell): the quarter of executed plans
+/// below 0.4–0.6 held 2–42 % of the time, the quarter above 0.7–1.7 held 90–100 %. Widening
+/// the candidate search while no candidate reached it changed no hand's rate beyond ±2 % and
+/// doubled the Shadow's median planning time, so only infeasibility widens that.
 pub const FIRM_ROBUSTNESS: f64 = 0.8;
 /// Times the hand is raised when the closed fingers reach into the table.
 const MAX_RAISES: usize = 2;
 /// How far each finger's contacts may stand off the object in the pre-grasp opening, m,
 /// tightest first.
 pub const PREGRASP_TRAVELS: [f64; 4] = [0.025, 0.04, 0.06, 0.09];
-/// Turns about the opposition line tried for each approach, degrees.
-const TURNS_DEG: [f64; 5] = [0.0, 30.0, -30.0, 60.0, -60.0];
-/// Approaches closer than this (cosine) count as one.
-const SAME_APPROACH_COS: f64 = 0.97;
 
 /// Cell of the grid the object's points are thinned to for collision queries, m: well below a
 /// finger's thickness, so no link passes between two points.
@@ -206,9 +207,12 @@ impl FinalConfiguration {
             }
         };
         self.score += self.robustness.weakest;
-        // Force closure (module step 4): contacts that cannot resist some direction at the
-        // centre of mass do not hold the object, whatever S says.
-        if self.feasible && self.robustness.weakest < MIN_ROBUSTNESS {
+        // Force closure (module step 4): three or more contacts that cannot resist some
+        // direction at the centre of mass do not hold the object, whatever S says. (A
+        // two-contact pinch resists a turn about its contact line only by torsion, which the
+        // point-contact model underrates for a gripper's pad: the 2F-85's pinches it called
+        // open held 6 of 6 in simulation.)
+        if self.feasible && self.contacts.len() >= 3 && self.robustness.weakest < MIN_ROBUSTNESS {
             self.feasible = false;
             self.reason = Some(format!(
                 "the contacts resist {:.2} of one contact's grip at the centre of mass in their \
@@ -280,70 +284,19 @@ pub fn search(
         taking_part,
     };
     let object = ObjectView::new(ctx.points, ctx.normals, ctx.plane.as_ref());
-    for (a, b) in oppositions.iter().take(4) {
-        tracing::debug!(
-            oc1 = ?ctx.points[*a].coords.as_slice(),
-            oc2 = ?ctx.points[*b].coords.as_slice(),
-            width = (ctx.points[*b] - ctx.points[*a]).norm(),
-            "stage-1 opposition"
-        );
-    }
-    // The stage-1 oppositions (best first), and the best moved to the height of the estimated
-    // centre of mass: a tall object held high tips and slides out of the hand in the lift.
-    let mut opps: Vec<((usize, usize), f64)> = oppositions
-        .iter()
-        .take(4)
-        .enumerate()
-        .map(|(rank, &o)| (o, rank as f64))
-        .collect();
-    if let Some(level) = oppositions
-        .first()
-        .and_then(|&o| at_centre_height(ctx, o))
-        .filter(|l| !oppositions.contains(l))
-    {
-        opps.push((level, 0.5));
-    }
-    let mut order: Vec<(f64, usize, Vector3<f64>)> = Vec::new();
-    for (rank, &((a, b), base_prior)) in opps.iter().enumerate() {
-        let line = match (ctx.points[b] - ctx.points[a]).try_normalize(1e-9) {
-            Some(l) => l,
-            None => continue,
-        };
-        let mut seen: Vec<Vector3<f64>> = Vec::new();
-        for (pref_rank, pref) in ctx.approach_prefs.iter().enumerate() {
-            let Some(base) = (pref - line * pref.dot(&line)).try_normalize(0.2) else {
-                continue;
-            };
-            for (turn_rank, deg) in TURNS_DEG.iter().enumerate() {
-                let r = UnitQuaternion::from_axis_angle(
-                    &nalgebra::Unit::new_normalize(line),
-                    deg.to_radians(),
-                );
-                let a_dir = r * base;
-                if seen.iter().any(|s| s.dot(&a_dir) > SAME_APPROACH_COS) {
-                    continue;
-                }
-                seen.push(a_dir);
-                let prior = base_prior + 0.6 * pref_rank as f64 + 0.8 * turn_rank as f64;
-                order.push((prior, rank, a_dir));
-            }
-        }
-    }
-    order.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let order = candidate_order(ctx, oppositions);
     let mut judged: Vec<FinalConfiguration> = Vec::new();
     // Candidates in order of preference, at most `final_candidates`; while none is feasible
-    // and firm the search goes on through the rest of the order, up to WIDENING times as many
-    // (method.md §3: widen the search before answering infeasible; a weak grasp rarely holds).
-    for (k, (_, rank, approach)) in order.iter().enumerate() {
-        let firm_so_far = judged
-            .iter()
-            .any(|c| c.feasible && !c.cut && c.robustness.weakest >= FIRM_ROBUSTNESS);
+    // the search goes on through the rest of the order, up to WIDENING times as many (method.md
+    // §3: widen the search before answering infeasible).
+    for (k, (opposition, approach)) in order.iter().enumerate() {
+        let feasible_so_far = judged.iter().any(|c| c.feasible);
         if k >= ctx.options.final_candidates
-            && (firm_so_far || k >= WIDENING * ctx.options.final_candidates)
+            && (feasible_so_far || k >= WIDENING * ctx.options.final_candidates)
         {
             break;
         }
-        let (a, b) = opps[*rank].0;
+        let (a, b) = *opposition;
         // The scores a candidate must beat to enter the best `want` found so far: among the
         // feasible ones, and (while fewer than `want` are feasible) among the two-sided
         // infeasible ones; None when infeasible ones can no longer be returned.
@@ -396,24 +349,6 @@ pub fn search(
     Ok(out)
 }
 
-/// The opposition `(a, b)` moved along the support's normal to the height of the estimated
-/// centre of mass: each point replaced by the cloud point nearest to it at that height, on the
-/// same side. None without a support plane, when the move is under a centimetre, or when no
-/// point lies within a centimetre of the moved one.
-fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usize, usize)> {
-    let up = ctx.plane.as_ref()?.normal;
-    let mid = Point3::from((ctx.points[a].coords + ctx.points[b].coords) / 2.0);
-    let shift = (ctx.shape.center - mid).dot(&up);
-    if shift.abs() < 0.01 {
-        return None;
-    }
-    let moved = |i: usize| {
-        let (k, d) = ctx.index.nearest_one(&(ctx.points[i] + up * shift));
-        (d <= 0.01).then_some(k)
-    };
-    Some((moved(a)?, moved(b)?))
-}
-
 /// The scores a candidate's robustness must lift it above to matter (`FinalConfiguration::rated`).
 #[derive(Debug, Clone, Copy)]
 struct Beat {
@@ -421,8 +356,8 @@ struct Beat {
     infeasible: Option<f64>,
 }
 
-/// Feasible candidates resist at least this force at the centre of mass in every direction,
-/// per unit grip force per contact (force closure with a margin).
+/// Feasible candidates of three or more contacts resist at least this force at the centre of
+/// mass in every direction, per unit grip force per contact (force closure with a margin).
 pub const MIN_ROBUSTNESS: f64 = 0.05;
 
 /// A candidate this robust (resisted force per unit grip force, weakest direction) ends the
