@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Starts target/release/graspd on a free loopback port with the shared hands imported, runs
-# `graspd-sim SUBCOMMAND ARGS...` against it (bench: the Table 5.2 run; stabilize: the tactile
-# closed loop under a disturbance), and stops the server. Called by `make sim-bench` and
-# `make sim-stabilize`.
+# `graspd-sim SUBCOMMAND ARGS...` against it (stabilize: the tactile closed loop under a
+# disturbance), and stops the server. Called by `make sim-bench` and `make sim-stabilize`.
+# `bench` with no further arguments is the standard run of docs/sim-benchmark.md, four hands,
+# 20 trials per cell, placements within ±10 cm: the Table 5.2 objects from a single RGB-D view,
+# all 13 shared objects from a single view, and the Table 5.2 objects from 3 fused views, into
+# sim-results/{table-5-2,all-objects,fused-views}.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 hands="$root/../shared/testdata/hands"
@@ -20,5 +23,14 @@ for _ in $(seq 100); do
 done
 addr="$(sed -n 's/^graspd listening grpc=\([^ ]*\).*/\1/p' "$log")"
 [ -n "$addr" ] || { cat "$log"; exit 1; }
-"$root/target/release/graspd-sim" --graspd "http://$addr" --testdata "$root/../shared/testdata" \
-    "$@"
+sim() {
+    "$root/target/release/graspd-sim" --graspd "http://$addr" \
+        --testdata "$root/../shared/testdata" "$@"
+}
+if [ "$#" -eq 1 ] && [ "$1" = bench ]; then
+    sim bench --trials 20 --out sim-results/table-5-2
+    sim bench --trials 20 --objects all --out sim-results/all-objects
+    sim bench --trials 20 --views 3 --out sim-results/fused-views
+else
+    sim "$@"
+fi

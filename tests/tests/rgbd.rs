@@ -127,7 +127,7 @@ fn assert_plan_on_the_can(plan: &GraspPlan, r: &RgbdRender, what: &str) {
     let (hu, hv) = r.object_pixel(0);
     assert!((au - hu as f64).abs() <= 3.0 && (av - hv as f64).abs() <= 3.0);
     assert!(!plan.contacts.is_empty());
-    // Seen contacts on the can; those on the mirror-completed side near it.
+    // Seen contacts on the can; those on the completed side near it.
     for c in &plan.contacts {
         let d = r.distance_to_object(0, &c.position);
         let limit = if c.inferred {

@@ -83,7 +83,7 @@ async fn ycb_objects_with_every_builtin_hand_over_grpc_and_rest() {
                 .unwrap()
                 .contact_count();
             assert_eq!(grpc.contacts.len(), m, "{what}: contact count");
-            // Seen contacts on the cloud; those on the mirror-completed side near the object.
+            // Seen contacts on the cloud; those on the completed side near the object.
             for c in &grpc.contacts {
                 if c.inferred {
                     let d = graspd_testkit::ycb::surface_distance(object, &c.position);

@@ -641,7 +641,7 @@ impl GraspService {
                         "extra_views",
                     )?;
                     object = fused;
-                    // The far side is measured: no mirror completion, and normals point away
+                    // The far side is measured: no completion, and normals point away
                     // from the object's centre (a single viewpoint no longer sees them all).
                     hints.viewpoint = None;
                     perceived.fusion = Some(report);

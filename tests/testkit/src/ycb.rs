@@ -193,7 +193,7 @@ pub fn mesh(object: Object) -> Result<Arc<TriMesh>> {
     Ok(m)
 }
 
-/// How far a contact on the mirror-completed, unseen side (`Contact::inferred`) may lie from the
+/// How far a contact on the completed, unseen side (`Contact::inferred`) may lie from the
 /// true surface, m: the YCB objects are only nearly symmetric, and a flat object seen across its
 /// broad side is completed deeper than it is (the mustard bottle by about 2 cm; see
 /// docs/final-configuration.md, "Completing the unseen side").

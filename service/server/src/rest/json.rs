@@ -632,7 +632,7 @@ pub struct ContactJson {
     /// IK residual (m) for a hand with known kinematics; absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ik_residual: Option<f64>,
-    /// On the completed, unseen side (`point_index` is the visible point it mirrors).
+    /// On the completed, unseen side (`point_index` is the visible point it completes).
     #[serde(default)]
     pub inferred: bool,
     /// Hands with kinematics: the body (link) of the model that touches.
