@@ -121,7 +121,10 @@ async fn shared_hands_plan_on_ycb_views_with_joints_inside_limits() {
                 );
                 // A linked gripper's second finger may push the object before both touch; the
                 // plan then says so, and at the grasp it is inside the object's points by that.
-                let pushes = plan.warnings.iter().any(|w| w.contains("linked fingers push"));
+                let pushes = plan
+                    .warnings
+                    .iter()
+                    .any(|w| w.contains("linked fingers push"));
                 assert!(
                     collision.final_points_in_collision < 3 || pushes,
                     "{what}: {collision:?}"

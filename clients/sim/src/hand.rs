@@ -273,8 +273,7 @@ fn derive(model_path: &Path, gain_scale: f64) -> Result<Derived, SimError> {
         mj.actuator_gear(),
     );
     let nu = mj.ffi().nu as usize;
-    let (gain, bias) = (mj.actuator_gainprm(), mj.actuator_biasprm());
-    let ctrl = mj.actuator_ctrlrange();
+    let gain = mj.actuator_gainprm();
     let limited = mj.actuator_forcelimited();
     let mut actuators = Vec::new();
     let mut all_limited = true;
@@ -284,20 +283,8 @@ fn derive(model_path: &Path, gain_scale: f64) -> Result<Derived, SimError> {
         if dl.abs() < 1e-3 {
             continue;
         }
-        // A position servo: force = g·ctrl + b₁·length; its command for a length is −b₁·l/g.
-        let (g, b1) = (gain[a][0], bias[a][1]);
-        let command = |l: f64| {
-            let c = if g.abs() > 1e-12 && b1.abs() > 1e-12 {
-                -b1 * l / g
-            } else {
-                l
-            };
-            if ctrl[a][0] < ctrl[a][1] {
-                c.clamp(ctrl[a][0], ctrl[a][1])
-            } else {
-                c
-            }
-        };
+        let g = gain[a][0];
+        let command = |l: f64| servo_command(&mj, a, l);
         let name = mj
             .id_to_name(MjtObjBase::mjOBJ_ACTUATOR, a)
             .unwrap_or_default()
@@ -365,5 +352,23 @@ mod tests {
         assert_eq!(graspd_name("Shadow Hand (right)"), "shadow_hand__right");
         assert_eq!(graspd_name("allegro_right"), "allegro_right");
         assert_eq!(graspd_name("!!"), "hand");
+    }
+}
+
+/// The command with which actuator `a`, a position servo (force = g·ctrl + b₁·length), holds
+/// `length` with no force: −b₁·length/g, within its control range (the length itself for an
+/// actuator that is not a servo).
+pub fn servo_command(mj: &MjModel, a: usize, length: f64) -> f64 {
+    let (g, b1) = (mj.actuator_gainprm()[a][0], mj.actuator_biasprm()[a][1]);
+    let c = if g.abs() > 1e-12 && b1.abs() > 1e-12 {
+        -b1 * length / g
+    } else {
+        length
+    };
+    let range = mj.actuator_ctrlrange()[a];
+    if range[0] < range[1] {
+        c.clamp(range[0], range[1])
+    } else {
+        c
     }
 }

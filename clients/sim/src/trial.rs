@@ -279,25 +279,10 @@ impl<'a> Trial<'a> {
         self.set_hand_joints(joints);
         self.data.forward();
         let m = &self.scene.model;
-        let nu = m.ffi().nu as usize;
-        let len = self.data.actuator_length().to_vec();
-        let (gain, bias) = (m.actuator_gainprm(), m.actuator_biasprm());
-        let mut cmd: Vec<f64> = (0..nu)
-            .map(|a| {
-                let (g, b1) = (gain[a][0], bias[a][1]);
-                if g.abs() > 1e-12 && b1.abs() > 1e-12 {
-                    -b1 * len[a] / g
-                } else {
-                    len[a]
-                }
-            })
+        let len = self.data.actuator_length();
+        let cmd: Vec<f64> = (0..m.ffi().nu as usize)
+            .map(|a| crate::hand::servo_command(m, a, len[a]))
             .collect();
-        let range = m.actuator_ctrlrange();
-        for (a, c) in cmd.iter_mut().enumerate() {
-            if range[a][0] < range[a][1] {
-                *c = c.clamp(range[a][0], range[a][1]);
-            }
-        }
         self.data.qpos_mut().copy_from_slice(&saved);
         self.data.forward();
         cmd

@@ -14,7 +14,8 @@
 //!    `squeeze_depth` into the object along their normals, none outward and no joint opening
 //!    (a small linear program per finger; linked groups by one path step) — the position
 //!    servos' error becomes the grip force; the pre-grasp joints are the pre-shape.
-//! 4. **Judge**: feasible when both sides touch, S ≥ ε (Eq 5.3, GII about the contacts), the
+//! 4. **Judge**: feasible when both sides touch, S ≥ ε (Eq 5.3, GII about the contacts; three
+//!    or more contacts with [`FIRM_ROBUSTNESS`] may stand in for it), the
 //!    grasp and the squeeze are clear of the table and linked fingers push the object at most
 //!    [`MAX_PUSH`]; ranked by the force at the estimated centre of mass the contacts resist in
 //!    their weakest direction ([`super::robustness`]), then by Q of Eq 5.2.
@@ -168,6 +169,8 @@ pub struct FinalConfiguration {
     /// Whether the robustness programs stopped early (the candidate could not enter the best
     /// `want`): `robustness` then holds an upper bound of the weakest axis.
     cut: bool,
+    /// Whether S < ε is all that keeps the candidate from being feasible.
+    short_of_epsilon_only: bool,
 }
 
 impl FinalConfiguration {
@@ -219,6 +222,18 @@ impl FinalConfiguration {
                  weakest direction (< {MIN_ROBUSTNESS}: not force closure)",
                 self.robustness.weakest
             ));
+        }
+        // S (Eq 5.3) measures how evenly the contacts resist wrenches, not whether they hold:
+        // three or more contacts that resist a firm force at the centre of mass in every
+        // direction hold the object whatever S says.
+        if !self.feasible
+            && self.short_of_epsilon_only
+            && !self.cut
+            && self.contacts.len() >= 3
+            && self.robustness.weakest >= FIRM_ROBUSTNESS
+        {
+            self.feasible = true;
+            self.reason = None;
         }
         tracing::debug!(
             robustness = self.robustness.weakest,
@@ -664,6 +679,9 @@ fn judge_with(
         push: closed.push,
         feasible: reason.is_none(),
         two_sided: h1_side && h2_side,
+        short_of_epsilon_only: reason
+            .as_deref()
+            .is_some_and(|r| r.starts_with("final configuration: S")),
         reason,
         score,
         cut: false,
