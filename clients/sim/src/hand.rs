@@ -343,18 +343,6 @@ fn graspd_name(model: &str) -> String {
     if s.is_empty() { "hand".into() } else { s }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn graspd_names_are_sanitised() {
-        assert_eq!(graspd_name("Shadow Hand (right)"), "shadow_hand__right");
-        assert_eq!(graspd_name("allegro_right"), "allegro_right");
-        assert_eq!(graspd_name("!!"), "hand");
-    }
-}
-
 /// The command with which actuator `a`, a position servo (force = g·ctrl + b₁·length), holds
 /// `length` with no force: −b₁·length/g, within its control range (the length itself for an
 /// actuator that is not a servo).
@@ -370,5 +358,17 @@ pub fn servo_command(mj: &MjModel, a: usize, length: f64) -> f64 {
         c.clamp(range[0], range[1])
     } else {
         c
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn graspd_names_are_sanitised() {
+        assert_eq!(graspd_name("Shadow Hand (right)"), "shadow_hand__right");
+        assert_eq!(graspd_name("allegro_right"), "allegro_right");
+        assert_eq!(graspd_name("!!"), "hand");
     }
 }
