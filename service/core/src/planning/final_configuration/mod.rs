@@ -15,7 +15,8 @@
 //!    (a small linear program per finger; linked groups by one path step) — the position
 //!    servos' error becomes the grip force; the pre-grasp joints are the pre-shape.
 //! 4. **Judge**: feasible when both sides touch, S ≥ ε (Eq 5.3, GII about the contacts; three
-//!    or more contacts with [`FIRM_ROBUSTNESS`] may stand in for it), the
+//!    or more contacts with [`FIRM_ROBUSTNESS`] may stand in for it; two contacts on a line
+//!    inside both friction cones), the
 //!    grasp and the squeeze are clear of the table and linked fingers push the object at most
 //!    [`MAX_PUSH`]; ranked by the force at the estimated centre of mass the contacts resist in
 //!    their weakest direction ([`super::robustness`]), then by Q of Eq 5.2.
@@ -28,6 +29,8 @@
 //! decides anything.
 
 pub mod closing_sweep;
+mod contacts;
+mod object_view;
 mod order;
 pub mod placement;
 mod pregrasp;
@@ -37,11 +40,12 @@ use super::kinematic_model::KinematicModel;
 use super::quality::{self, ContactPoint};
 use super::robustness::Robustness;
 use super::search_context::{PLANE_TOLERANCE, SearchContext};
-use crate::cloud::{CloudIndex, LazyNormals, Plane};
 use crate::error::FieldError;
 use crate::hand::kinematics::PreShape;
-use closing_sweep::{SweepContact, SweepHand, close_fingers, patch};
+use closing_sweep::{SweepContact, SweepHand, close_fingers};
+use contacts::{outside_friction_cone, palm_contacts};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+pub use object_view::{COLLISION_CELL, ObjectView};
 use order::candidate_order;
 use pregrasp::{advance_contacts, joints_at};
 use squeeze::squeeze_joints;
@@ -65,78 +69,6 @@ const MAX_RAISES: usize = 2;
 /// How far each finger's contacts may stand off the object in the pre-grasp opening, m,
 /// tightest first.
 pub const PREGRASP_TRAVELS: [f64; 4] = [0.025, 0.04, 0.06, 0.09];
-
-/// Cell of the grid the object's points are thinned to for collision queries, m: well below a
-/// finger's thickness, so no link passes between two points.
-pub const COLLISION_CELL: f64 = 0.004;
-
-/// The object as the search sees it: its points thinned to one per [`COLLISION_CELL`] for the
-/// collision queries, with the planner's normals.
-pub struct ObjectView<'a> {
-    pub points: Vec<Point3<f64>>,
-    pub index: CloudIndex,
-    /// For each thinned point, its index in the planner's cloud.
-    pub source: Vec<usize>,
-    pub normals: &'a LazyNormals<'a>,
-    pub plane: Option<&'a Plane>,
-    /// Bounds of the points.
-    lo: Point3<f64>,
-    hi: Point3<f64>,
-}
-
-impl<'a> ObjectView<'a> {
-    pub fn new(
-        cloud: &[Point3<f64>],
-        normals: &'a LazyNormals<'a>,
-        plane: Option<&'a Plane>,
-    ) -> Self {
-        let all: Vec<usize> = (0..cloud.len()).collect();
-        let source = super::slot_set::voxel_subset(cloud, &all, COLLISION_CELL);
-        let points: Vec<Point3<f64>> = source.iter().map(|&i| cloud[i]).collect();
-        let mut lo = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
-        let mut hi = -lo;
-        for p in &points {
-            lo = lo.inf(p);
-            hi = hi.sup(p);
-        }
-        Self {
-            index: CloudIndex::new(&points),
-            points,
-            source,
-            normals,
-            plane,
-            lo,
-            hi,
-        }
-    }
-
-    /// Whether `p` lies below the object's top (along `up`) by at least `fraction` of its height.
-    pub fn below_top(&self, p: &Point3<f64>, up: &Vector3<f64>, fraction: f64) -> bool {
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for q in &self.points {
-            let h = q.coords.dot(up);
-            lo = lo.min(h);
-            hi = hi.max(h);
-        }
-        p.coords.dot(up) <= hi - fraction * (hi - lo)
-    }
-
-    /// The object's extent along unit `dir`, m.
-    pub fn extent_along(&self, dir: &Vector3<f64>) -> f64 {
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for q in &self.points {
-            let h = q.coords.dot(dir);
-            lo = lo.min(h);
-            hi = hi.max(h);
-        }
-        (hi - lo).max(0.0)
-    }
-
-    /// Whether a sphere may reach the points (overlaps their bounding box).
-    pub fn near(&self, c: &Point3<f64>, r: f64) -> bool {
-        (0..3).all(|k| c[k] + r >= self.lo[k] && c[k] - r <= self.hi[k])
-    }
-}
 
 /// One judged candidate.
 #[derive(Debug, Clone)]
@@ -634,6 +566,11 @@ fn judge_with(
                 "neither"
             }
         ))
+    } else if let Some(end) = outside_friction_cone(ctx.cos_friction, &contacts) {
+        Some(format!(
+            "the line between the two contacts leaves the {end} contact's friction cone (μ = {})",
+            ctx.options.friction
+        ))
     } else if gii < ctx.options.epsilon {
         Some(format!(
             "final configuration: S = {gii:.3} < ε = {}",
@@ -686,35 +623,4 @@ fn judge_with(
         score,
         cut: false,
     }))
-}
-
-/// Contacts of the bodies that belong to no finger (the palm, the hand's base) at `q`.
-fn palm_contacts(
-    model: &KinematicModel,
-    sweep: &SweepHand,
-    q: &[f64],
-    object: &ObjectView,
-) -> Result<Vec<SweepContact>, FieldError> {
-    let hand = &model.hand;
-    let fk = hand.tree.forward(q)?;
-    let posed = model.collision.posed_fk(&fk, &sweep.root_in_world);
-    let in_finger = |b: usize| hand.fingers.iter().any(|f| f.bodies.contains(&b));
-    let mut bodies: Vec<usize> = model
-        .collision
-        .pieces
-        .iter()
-        .map(|p| p.body)
-        .filter(|&b| !in_finger(b))
-        .collect();
-    bodies.dedup();
-    let mut out = Vec::new();
-    for b in bodies {
-        let pieces: Vec<usize> = (0..model.collision.pieces.len())
-            .filter(|&k| model.collision.pieces[k].body == b)
-            .collect();
-        if let Some(c) = patch(&posed, &pieces, object, b, None) {
-            out.push(c);
-        }
-    }
-    Ok(out)
 }

@@ -1,0 +1,77 @@
+//! The object as the final-configuration search sees it (the visible points and their
+//! completion, thinned for the collision queries).
+
+use crate::cloud::{CloudIndex, LazyNormals, Plane};
+use nalgebra::{Point3, Vector3};
+
+/// Cell of the grid the object's points are thinned to for collision queries, m: well below a
+/// finger's thickness, so no link passes between two points.
+pub const COLLISION_CELL: f64 = 0.004;
+
+/// The object as the search sees it: its points thinned to one per [`COLLISION_CELL`] for the
+/// collision queries, with the planner's normals.
+pub struct ObjectView<'a> {
+    pub points: Vec<Point3<f64>>,
+    pub index: CloudIndex,
+    /// For each thinned point, its index in the planner's cloud.
+    pub source: Vec<usize>,
+    pub normals: &'a LazyNormals<'a>,
+    pub plane: Option<&'a Plane>,
+    /// Bounds of the points.
+    lo: Point3<f64>,
+    hi: Point3<f64>,
+}
+
+impl<'a> ObjectView<'a> {
+    pub fn new(
+        cloud: &[Point3<f64>],
+        normals: &'a LazyNormals<'a>,
+        plane: Option<&'a Plane>,
+    ) -> Self {
+        let all: Vec<usize> = (0..cloud.len()).collect();
+        let source = super::super::slot_set::voxel_subset(cloud, &all, COLLISION_CELL);
+        let points: Vec<Point3<f64>> = source.iter().map(|&i| cloud[i]).collect();
+        let mut lo = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        let mut hi = -lo;
+        for p in &points {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        Self {
+            index: CloudIndex::new(&points),
+            points,
+            source,
+            normals,
+            plane,
+            lo,
+            hi,
+        }
+    }
+
+    /// Whether `p` lies below the object's top (along `up`) by at least `fraction` of its height.
+    pub fn below_top(&self, p: &Point3<f64>, up: &Vector3<f64>, fraction: f64) -> bool {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for q in &self.points {
+            let h = q.coords.dot(up);
+            lo = lo.min(h);
+            hi = hi.max(h);
+        }
+        p.coords.dot(up) <= hi - fraction * (hi - lo)
+    }
+
+    /// The object's extent along unit `dir`, m.
+    pub fn extent_along(&self, dir: &Vector3<f64>) -> f64 {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for q in &self.points {
+            let h = q.coords.dot(dir);
+            lo = lo.min(h);
+            hi = hi.max(h);
+        }
+        (hi - lo).max(0.0)
+    }
+
+    /// Whether a sphere may reach the points (overlaps their bounding box).
+    pub fn near(&self, c: &Point3<f64>, r: f64) -> bool {
+        (0..3).all(|k| c[k] + r >= self.lo[k] && c[k] - r <= self.hi[k])
+    }
+}
