@@ -7,14 +7,14 @@
 //! camera-to-world transform, adds the points it sees of that object: its depth image
 //! back-projected into the world, the support's points dropped (within
 //! [`SegmentationParams::plane_margin`] of the plane, or below it), and kept what connects to
-//! the object — points within [`SegmentationParams::cluster_radius`] of the object or of points
-//! already kept (region growing, as the Euclidean clustering of one view grows a cluster), and
+//! the object — those in one Euclidean cluster with it ([`euclidean_clusters`] at
+//! [`SegmentationParams::cluster_radius`], as one view's segmentation clusters), and
 //! inside the object's bounds widened by [`MAX_GROWTH`] so that a neighbour touching it is not
 //! swallowed whole. A point within [`DUPLICATE`] of one already in the cloud adds nothing.
 
 use super::depth_to_cloud::{CloudFrame, depth_to_cloud};
 use super::rgbd::DecodedFrame;
-use super::segmentation::SegmentationParams;
+use super::segmentation::{SegmentationParams, euclidean_clusters};
 use crate::cloud::{CloudIndex, Plane, PointCloud};
 use crate::error::FieldError;
 use nalgebra::Point3;
@@ -72,22 +72,16 @@ pub fn fuse_views(
         if candidates.is_empty() {
             continue;
         }
-        let index = CloudIndex::new(&candidates);
+        // The Euclidean clusters of the object and the candidates together (those of one
+        // view's segmentation): the candidates in a cluster with the object connect to it.
+        let n = points.len();
+        let all: Vec<Point3<f64>> = points.iter().chain(&candidates).copied().collect();
+        let idx: Vec<usize> = (0..all.len()).collect();
         let mut taken = vec![false; candidates.len()];
-        let mut frontier: Vec<usize> = Vec::new();
-        for p in &points {
-            for k in index.within_unsorted(p, params.cluster_radius) {
-                if !taken[k] {
-                    taken[k] = true;
-                    frontier.push(k);
-                }
-            }
-        }
-        while let Some(k) = frontier.pop() {
-            for j in index.within_unsorted(&candidates[k], params.cluster_radius) {
-                if !taken[j] {
-                    taken[j] = true;
-                    frontier.push(j);
+        for cluster in euclidean_clusters(&all, &idx, params.cluster_radius, 1) {
+            if cluster.iter().any(|&i| i < n) {
+                for &i in cluster.iter().filter(|&&i| i >= n) {
+                    taken[i - n] = true;
                 }
             }
         }
