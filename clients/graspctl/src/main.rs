@@ -310,6 +310,7 @@ fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
             support_plane: args.support_plane,
             viewpoint: args.viewpoint,
             up: None,
+            detected_attention: None,
             detected_types: None,
         },
         image_hints: ImageHints {

@@ -614,7 +614,13 @@ impl GraspService {
                 let info = &perceived.info;
                 hints.support_plane = hints.support_plane.or(info.plane);
                 hints.viewpoint = hints.viewpoint.or(Some(info.viewpoint));
-                hints.attention_point = hints.attention_point.or(info.attention_point);
+                // A pixel the caller named gives a binding attention point; the model's is a
+                // suggestion (PlanHints::detected_attention).
+                if request.image_hints.attention_pixel.is_some() {
+                    hints.attention_point = hints.attention_point.or(info.attention_point);
+                } else {
+                    hints.detected_attention = info.attention_point;
+                }
                 if hints.grasp_type.is_none() {
                     hints.detected_types = info.detection.as_ref().map(|d| d.probabilities);
                 }

@@ -370,6 +370,47 @@ pub fn opposition_stage(
     (list.iter().map(|c| (c[0], c[1])).collect(), ok, s1, reason)
 }
 
+/// Attention points closer than this give one stage 1, m.
+const SAME_ATTENTION: f64 = 0.02;
+
+/// Stage 1 (Algorithm 4, lines 3–5) from `ctx`'s attention point and, for a hand with
+/// kinematics, also from `centre` — the surface point over the estimated centre of mass, index
+/// into the cloud — when it lies more than [`SAME_ATTENTION`] away: the two lists interleaved,
+/// best first, without repeats. The detector's attention point (Eq 4.3) may sit at an end of an
+/// elongated object (a banana's tip), where no grasp balances the weight; the final search ranks
+/// both by what they hold. The statistics and the constraint report are the first run's.
+pub fn opposition_stage_about(
+    ctx: &SearchContext,
+    centre: Option<usize>,
+    seed: u64,
+) -> (Vec<(usize, usize)>, bool, StageStats, Option<String>) {
+    use rand::SeedableRng;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (first, ok, s1, reason) = opposition_stage(ctx, &mut rng);
+    let Some(c) = centre.filter(|&c| (ctx.points[c] - ctx.p_att).norm() > SAME_ATTENTION) else {
+        return (first, ok, s1, reason);
+    };
+    let mut centred_ctx = ctx.for_grasp(ctx.grasp, ctx.approach_prefs.clone());
+    centred_ctx.p_att = ctx.points[c];
+    centred_ctx.n_att = ctx.normals.get(c);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (second, _, _, _) = opposition_stage(&centred_ctx, &mut rng);
+    let mut merged: Vec<(usize, usize)> = Vec::with_capacity(first.len() + second.len());
+    let (mut a, mut b) = (first.iter(), second.iter());
+    loop {
+        let (x, y) = (a.next(), b.next());
+        if x.is_none() && y.is_none() {
+            break;
+        }
+        for o in [x, y].into_iter().flatten() {
+            if !merged.contains(o) {
+                merged.push(*o);
+            }
+        }
+    }
+    (merged, ok, s1, reason)
+}
+
 /// Algorithm 4, lines 6–7 (or the ablation): the final contacts.
 pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome> {
     let mut s1 = StageStats::default();
@@ -534,4 +575,35 @@ pub fn search(ctx: &SearchContext, rng: &mut ChaCha8Rng) -> Option<SearchOutcome
         final_weights: ctx.options.stage2_weights,
         alternatives: if feasible { alternatives } else { Vec::new() },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grasp_type::GraspType;
+    use crate::planning::test_scene::Rod;
+    use rand::SeedableRng;
+
+    /// With p_att at one end of a 48 cm rod, the oppositions from the centre's surface point
+    /// come in too, interleaved (the first of each run leads): one centred within 5 cm of the
+    /// middle, where the end's lie 10 cm or more from it; a centre within 2 cm of p_att adds
+    /// nothing.
+    #[test]
+    fn stage_one_about_the_centre_adds_oppositions_there() {
+        let rod = Rod::new(0.48, "barrett", GraspType::Tripod);
+        let normals = rod.normals();
+        let end = rod.nearest(Point3::new(0.23, 0.0, 0.04));
+        let middle = rod.nearest(Point3::new(0.0, 0.0, 0.04));
+        let ctx = rod.context(&normals, end);
+        let mid_x = |(a, b): (usize, usize)| ((rod.points[a].x + rod.points[b].x) / 2.0).abs();
+        let alone = opposition_stage(&ctx, &mut ChaCha8Rng::seed_from_u64(7)).0;
+        assert!(!alone.is_empty());
+        assert!(alone.iter().all(|&o| mid_x(o) > 0.1), "{alone:?}");
+        let (about, ..) = opposition_stage_about(&ctx, Some(middle), 7);
+        assert_eq!(about[0], alone[0]);
+        assert!(mid_x(about[1]) < 0.05, "{about:?}");
+        assert!(alone.iter().all(|o| about.contains(o)));
+        let near_end = rod.nearest(Point3::new(0.22, 0.0, 0.04));
+        assert_eq!(opposition_stage_about(&ctx, Some(near_end), 7).0, alone);
+    }
 }

@@ -15,6 +15,8 @@ pub mod quality;
 pub mod robustness;
 pub mod search_context;
 pub mod slot_set;
+#[cfg(test)]
+mod test_scene;
 pub mod type_choice;
 pub mod type_rule;
 pub mod types;

@@ -328,7 +328,14 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
             }
             i
         }
-        None => type_rule::attention_point_by_rule(&shape, points, &rule_approach),
+        None => hints
+            .detected_attention
+            .map(|p| index.nearest_one(&p))
+            .filter(|&(_, d)| d <= MAX_ATTENTION_DISTANCE)
+            .map_or_else(
+                || type_rule::attention_point_by_rule(&shape, points, &rule_approach),
+                |(i, _)| i,
+            ),
     };
     let (p_att, n_att) = (points[att], normals.get(att));
     if type_source != TypeSource::Model {
@@ -401,8 +408,19 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
             let mut tried: Vec<TypeAttempt> = Vec::new();
             for g in types {
                 let ctx = base.for_grasp(&g, approach_prefs(&g));
-                let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
-                let (oppositions, ok, s1, reason) = dual_stage::opposition_stage(&ctx, &mut rng);
+                // The caller's attention point binds; the detector's is one of two starts.
+                let centre = hints.attention_point.is_none().then(|| {
+                    let rule = type_rule::approach_by_rule(
+                        &shape,
+                        g.grasp_type,
+                        points,
+                        up.as_ref(),
+                        hints.viewpoint.as_ref(),
+                    );
+                    type_rule::attention_point_by_rule(&shape, points, &rule)
+                });
+                let (oppositions, ok, s1, reason) =
+                    dual_stage::opposition_stage_about(&ctx, centre, options.seed);
                 if oppositions.is_empty() {
                     continue;
                 }

@@ -128,6 +128,10 @@ pub struct PlanHints {
     pub grasp_type: Option<GraspType>,
     /// Approach here (snapped to the nearest cloud point).
     pub attention_point: Option<Point3<f64>>,
+    /// The grasp-type model's attention point (Eq 4.3), when no `attention_point` was given:
+    /// p_att as well, but a suggestion — a hand with kinematics also tries the oppositions about
+    /// the surface point over the estimated centre of mass (`dual_stage::opposition_stage_about`).
+    pub detected_attention: Option<Point3<f64>>,
     /// The plane the object stands on.
     pub support_plane: Option<Plane>,
     /// Sensor position in the cloud's frame: normals face it and it sets the approach side.

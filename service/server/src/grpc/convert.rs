@@ -489,6 +489,7 @@ fn hints_from_proto(h: Option<pb::PlanHints>) -> Result<(PlanHints, ImageHints),
             .transpose()?,
         viewpoint: h.viewpoint.as_ref().map(point_from_proto),
         up: h.up.as_ref().map(vec3_from_proto),
+        detected_attention: None,
         detected_types: None,
     };
     let image = ImageHints {

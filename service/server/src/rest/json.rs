@@ -562,6 +562,7 @@ pub fn plan_request_from_json(
         }),
         viewpoint: h.viewpoint.map(|p| p.point()),
         up: h.up.map(|p| p.vector()),
+        detected_attention: None,
         detected_types: None,
     };
     let image_hints = ImageHints {

@@ -21,10 +21,13 @@
 //!    [`MAX_PUSH`]; ranked by the force at the estimated centre of mass the contacts resist in
 //!    their weakest direction ([`super::robustness`]), then by Q of Eq 5.2.
 //!
-//! Candidates ([`order`]): up to four stage-1 oppositions and the best moved to the height of
-//! the estimated centre of mass × the approach preferences (−n_att, the rule's approach, −up,
-//! −z; each made perpendicular to the opposition) × turns of 0, ±30° and ±60° about the
-//! opposition line, in that order of preference; at most `options.final_candidates` are
+//! Candidates ([`order`]): up to four stage-1 oppositions (from the attention point and the
+//! surface point over the centre of mass, `dual_stage::opposition_stage_about`) and the best
+//! moved to the height of the estimated centre of mass, each also with the thumb on the other
+//! side × the approach preferences (−n_att, the rule's approach, −up, −z; each made
+//! perpendicular to the opposition) × turns of 0, ±30° and ±60° about the opposition line (a
+//! palm opposition: rolls about it), in that order of preference; at most
+//! `options.final_candidates` are
 //! judged, up to [`WIDENING`] times as many while none is feasible. Deterministic: no clock
 //! decides anything.
 
@@ -374,15 +377,9 @@ fn judge_with(
     let syn = &model.synergy;
     let pre = grasp.pre;
     let (p1, p2) = (ctx.points[oc1], ctx.points[oc2]);
-    let Some(target) = placement::target_frame(
-        pre,
-        &p1,
-        &p2,
-        approach,
-        &ctx.shape.axes[0],
-        &ctx.shape.center,
-        |x| object.extent_along(x),
-    ) else {
+    let Some(target) = placement::target_frame(pre, &p1, &p2, approach, &ctx.shape.center, |x| {
+        object.extent_along(x)
+    }) else {
         return Ok(None);
     };
     let mut aligned = placement::hand_pose_for(pre, &target);

@@ -1,18 +1,28 @@
 //! The order in which the final-configuration search judges candidates (module docs of
 //! [`super`]): up to four stage-1 oppositions, and the best one moved to the height of the
 //! estimated centre of mass (a tall object held high tips and slides out of the hand in the
-//! lift), each × the approach preferences (made perpendicular to the opposition) × turns about
-//! the opposition line; best prior first.
+//! lift); each also with its ends swapped — the thumb on the other side, the hand turned half
+//! round about the approach (beside a tall object one of the two puts the forearm into the
+//! table); each × the approach preferences (made perpendicular to the opposition) × turns about
+//! the opposition line; best prior first. A palm opposition fixes the approach (the line
+//! itself): its candidates are rolls about the line instead.
 
 use super::super::search_context::SearchContext;
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// Turns about the opposition line tried for each approach, degrees.
 const TURNS_DEG: [f64; 5] = [0.0, 30.0, -30.0, 60.0, -60.0];
+/// Rolls about the opposition line of a palm grasp, degrees from the object's long axis.
+const PALM_ROLLS_DEG: [f64; 6] = [0.0, 180.0, 45.0, -45.0, 135.0, -135.0];
 /// Approaches closer than this (cosine) count as one.
 const SAME_APPROACH_COS: f64 = 0.97;
+/// How far down the order the swapped opposition comes after its original (in the units of
+/// the oppositions' ranks).
+const SWAPPED_PRIOR: f64 = 0.3;
 
-/// The candidates to judge, in order: (opposition, approach direction).
+/// The candidates to judge, in order: (opposition, direction) — the approach direction for a
+/// finger opposition, the axis the fingers wrap around for a palm opposition
+/// ([`super::placement::target_frame`]).
 pub(super) fn candidate_order(
     ctx: &SearchContext,
     oppositions: &[(usize, usize)],
@@ -38,22 +48,45 @@ pub(super) fn candidate_order(
     {
         opps.push((level, 0.5));
     }
+    let palm = ctx.grasp.h1_fingers.is_empty();
+    if !palm {
+        let swapped: Vec<_> = opps
+            .iter()
+            .map(|&((a, b), p)| ((b, a), p + SWAPPED_PRIOR))
+            .collect();
+        opps.extend(swapped);
+    }
     let mut order: Vec<(f64, (usize, usize), Vector3<f64>)> = Vec::new();
     for &((a, b), base_prior) in &opps {
         let Some(line) = (ctx.points[b] - ctx.points[a]).try_normalize(1e-9) else {
             continue;
         };
+        let turn = |deg: f64| {
+            UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(line), deg.to_radians())
+        };
+        if palm {
+            // The axis the fingers wrap around: the object's long axis, both ways (which side
+            // the thumb lies on), then turned.
+            let axis = ctx.shape.axes[0];
+            let Some(base) = (axis - line * axis.dot(&line))
+                .try_normalize(0.2)
+                .or_else(|| line.cross(&Vector3::x()).try_normalize(0.2))
+                .or_else(|| line.cross(&Vector3::y()).try_normalize(0.2))
+            else {
+                continue;
+            };
+            for (rank, deg) in PALM_ROLLS_DEG.iter().enumerate() {
+                order.push((base_prior + 0.4 * rank as f64, (a, b), turn(*deg) * base));
+            }
+            continue;
+        }
         let mut seen: Vec<Vector3<f64>> = Vec::new();
         for (pref_rank, pref) in ctx.approach_prefs.iter().enumerate() {
             let Some(base) = (pref - line * pref.dot(&line)).try_normalize(0.2) else {
                 continue;
             };
             for (turn_rank, deg) in TURNS_DEG.iter().enumerate() {
-                let r = UnitQuaternion::from_axis_angle(
-                    &nalgebra::Unit::new_normalize(line),
-                    deg.to_radians(),
-                );
-                let a_dir = r * base;
+                let a_dir = turn(*deg) * base;
                 if seen.iter().any(|s| s.dot(&a_dir) > SAME_APPROACH_COS) {
                     continue;
                 }
@@ -83,4 +116,59 @@ fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usiz
         (d <= 0.01).then_some(k)
     };
     Some((moved(a)?, moved(b)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grasp_type::GraspType;
+    use crate::planning::test_scene::Rod;
+    use nalgebra::Point3;
+
+    /// A finger opposition comes first as found, then (further down) with its ends swapped,
+    /// each with approaches perpendicular to its line.
+    #[test]
+    fn finger_oppositions_come_both_ways_round() {
+        let rod = Rod::new(0.2, "barrett", GraspType::Tripod);
+        let normals = rod.normals();
+        let ctx = rod.context(&normals, rod.nearest(Point3::new(0.0, 0.0, 0.04)));
+        let (a, b) = (
+            rod.nearest(Point3::new(0.0, -0.02, 0.02)),
+            rod.nearest(Point3::new(0.0, 0.02, 0.02)),
+        );
+        let order = candidate_order(&ctx, &[(a, b)]);
+        assert_eq!(order[0].0, (a, b));
+        let swapped = order.iter().position(|c| c.0 == (b, a)).unwrap();
+        assert!(swapped > 0);
+        let line = (rod.points[b] - rod.points[a]).normalize();
+        assert!(order.iter().all(|(_, d)| d.dot(&line).abs() < 1e-9));
+        // Straight down first: the only approach preference.
+        assert!(
+            (order[0].1 + Vector3::z()).norm() < 1e-9,
+            "{:?}",
+            order[0].1
+        );
+    }
+
+    /// A palm opposition's candidates are rolls about its line: the wrap axis along the
+    /// object's long axis both ways (thumb on either side) first, every one perpendicular to
+    /// the line, and the opposition never swapped (the palm side is the palm).
+    #[test]
+    fn palm_oppositions_roll_about_their_line() {
+        let rod = Rod::new(0.2, "shadow", GraspType::SmallWrap);
+        assert!(rod.grasp.h1_fingers.is_empty());
+        let normals = rod.normals();
+        let ctx = rod.context(&normals, rod.nearest(Point3::new(0.0, 0.0, 0.04)));
+        let (a, b) = (
+            rod.nearest(Point3::new(0.0, 0.0, 0.04)),
+            rod.nearest(Point3::new(0.0, 0.02, 0.02)),
+        );
+        let order = candidate_order(&ctx, &[(a, b)]);
+        assert_eq!(order.len(), PALM_ROLLS_DEG.len());
+        assert!(order.iter().all(|c| c.0 == (a, b)));
+        let line = (rod.points[b] - rod.points[a]).normalize();
+        assert!(order.iter().all(|(_, d)| d.dot(&line).abs() < 1e-9));
+        assert!(order[0].1.x.abs() > 0.99, "{:?}", order[0].1);
+        assert!((order[0].1 + order[1].1).norm() < 1e-9);
+    }
 }

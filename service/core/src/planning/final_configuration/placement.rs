@@ -5,8 +5,8 @@
 //!
 //! - Finger oppositions (thumb against fingers): the frame's x (h1 → h2) on oc1 → oc2, its z on
 //!   the approach (made perpendicular to x), its origin on the opposition's midpoint.
-//! - A palm opposition: the frame's z (palm → fingers) on oc1 → oc2 and its y along the
-//!   object's long axis (the fingers wrap around it).
+//! - A palm opposition: the frame's z (palm → fingers) on oc1 → oc2 and its y on the wrap axis
+//!   the candidate gives (the fingers wrap around it: the object's long axis, rolled).
 //! - Fingertip types (pinch, tripod, precision) stop at the aligned pose, the fingertips around
 //!   the opposition; the wrap types (power, large and small wrap) go on until the palm or the
 //!   open fingers meet the object.
@@ -27,7 +27,8 @@ const HALVINGS: usize = 4;
 const FINGERTIP_DEPTH: f64 = 0.01;
 
 /// The world frame a pre-shape's grasp frame is put on: x closing, z approach, the origin on
-/// the opposition's midpoint. With three or more fingers it moves across the fingers (y) onto
+/// the opposition's midpoint (`direction`: the approach of a finger opposition, the wrap axis
+/// of a palm opposition; made perpendicular to the opposition). With three or more fingers it moves across the fingers (y) onto
 /// the estimated centre of mass, and along the closing axis too when the object fits in the
 /// pre-shape's opening there (`extent_x`): balanced fingers, no moment from the weight about
 /// the grasp. An object wider than the hand opens is grasped where the opposition is (a rim, an
@@ -36,17 +37,16 @@ pub fn target_frame(
     pre: &PreShape,
     oc1: &Point3<f64>,
     oc2: &Point3<f64>,
-    approach: &Vector3<f64>,
-    object_axis: &Vector3<f64>,
+    direction: &Vector3<f64>,
     centre_of_mass: &Point3<f64>,
     extent_x: impl Fn(&Vector3<f64>) -> f64,
 ) -> Option<Isometry3<f64>> {
     let line = (oc2 - oc1).try_normalize(1e-9)?;
     let mid = Point3::from((oc1.coords + oc2.coords) / 2.0);
     let rot = if pre.h1.is_empty() {
-        // Palm opposition: z along the line, y along the object's axis.
+        // Palm opposition: z along the line, y along the wrap axis.
         let z = line;
-        let y = (object_axis - z * object_axis.dot(&z))
+        let y = (direction - z * direction.dot(&z))
             .try_normalize(0.2)
             .or_else(|| {
                 let o = if z.x.abs() < 0.9 {
@@ -59,7 +59,7 @@ pub fn target_frame(
         Rotation3::from_basis_unchecked(&[y.cross(&z), y, z])
     } else {
         let x = line;
-        let z = (approach - x * approach.dot(&x)).try_normalize(1e-6)?;
+        let z = (direction - x * direction.dot(&x)).try_normalize(1e-6)?;
         Rotation3::from_basis_unchecked(&[x, z.cross(&x), z])
     };
     let (x, y) = (rot * Vector3::x(), rot * Vector3::y());
@@ -185,6 +185,14 @@ pub fn rise_above_table(
     let posed = collision.posed_fk(&fk, &root);
     let at = posed.plane_clearance(pl);
     let out = at - back * approach.dot(&pl.normal);
+    if tracing::enabled!(tracing::Level::TRACE) {
+        for k in 0..posed.len() {
+            let c = posed.piece_plane_clearance(k, pl);
+            if c < CLEARANCE {
+                tracing::trace!(body = %hand.tree.bodies[posed.body_of(k)].name, c, "below the table");
+            }
+        }
+    }
     Ok((CLEARANCE - at.min(out)).max(0.0))
 }
 
