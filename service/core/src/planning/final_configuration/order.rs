@@ -1,9 +1,10 @@
 //! The order in which the final-configuration search judges candidates (module docs of
 //! [`super`]): up to four stage-1 oppositions, and the best one moved to the height of the
 //! estimated centre of mass (a tall object held high tips and slides out of the hand in the
-//! lift); each also with its ends swapped — the thumb on the other side, the hand turned half
-//! round about the approach (beside a tall object one of the two puts the forearm into the
-//! table); each × the approach preferences (made perpendicular to the opposition) × turns about
+//! lift), these two also with their ends swapped — the thumb on the other side, the hand turned
+//! half round about the approach (beside a tall object one of the two puts the forearm into the
+//! table; swapping the lesser oppositions too cost the Shadow 7 ms at the median and held no
+//! more); each × the approach preferences (made perpendicular to the opposition) × turns about
 //! the opposition line; best prior first. A palm opposition fixes the approach (the line
 //! itself): its candidates are rolls about the line instead.
 
@@ -19,6 +20,9 @@ const SAME_APPROACH_COS: f64 = 0.97;
 /// How far down the order the swapped opposition comes after its original (in the units of
 /// the oppositions' ranks).
 const SWAPPED_PRIOR: f64 = 0.3;
+/// Oppositions ranked before this (the best and its centre-height version) are also tried
+/// with their ends swapped.
+const SWAPPED_BELOW: f64 = 1.0;
 
 /// The candidates to judge, in order: (opposition, direction) — the approach direction for a
 /// finger opposition, the axis the fingers wrap around for a palm opposition
@@ -52,6 +56,7 @@ pub(super) fn candidate_order(
     if !palm {
         let swapped: Vec<_> = opps
             .iter()
+            .filter(|&&(_, p)| p < SWAPPED_BELOW)
             .map(|&((a, b), p)| ((b, a), p + SWAPPED_PRIOR))
             .collect();
         opps.extend(swapped);
