@@ -396,13 +396,8 @@ pub fn opposition_stage_about(
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let (second, _, _, _) = opposition_stage(&centred_ctx, &mut rng);
     let mut merged: Vec<(usize, usize)> = Vec::with_capacity(first.len() + second.len());
-    let (mut a, mut b) = (first.iter(), second.iter());
-    loop {
-        let (x, y) = (a.next(), b.next());
-        if x.is_none() && y.is_none() {
-            break;
-        }
-        for o in [x, y].into_iter().flatten() {
+    for k in 0..first.len().max(second.len()) {
+        for o in [first.get(k), second.get(k)].into_iter().flatten() {
             if !merged.contains(o) {
                 merged.push(*o);
             }

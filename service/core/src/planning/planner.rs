@@ -305,13 +305,10 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
     } else {
         hand.resolve_detected(requested)
     };
-    let rule_approach = type_rule::approach_by_rule(
-        &shape,
-        grasp.grasp_type,
-        points,
-        up.as_ref(),
-        hints.viewpoint.as_ref(),
-    );
+    let rule_approach_for = |t: GraspType| {
+        type_rule::approach_by_rule(&shape, t, points, up.as_ref(), hints.viewpoint.as_ref())
+    };
+    let rule_approach = rule_approach_for(grasp.grasp_type);
     let att = match hints.attention_point {
         Some(p) => {
             let (i, d) = index.nearest_one(&p);
@@ -344,14 +341,7 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
     let t_type = t.elapsed().as_secs_f64();
 
     let approach_prefs = |g: &ResolvedGrasp| {
-        let rule = type_rule::approach_by_rule(
-            &shape,
-            g.grasp_type,
-            points,
-            up.as_ref(),
-            hints.viewpoint.as_ref(),
-        );
-        let mut prefs = vec![-n_att, rule];
+        let mut prefs = vec![-n_att, rule_approach_for(g.grasp_type)];
         if let Some(u) = up {
             prefs.push(-u);
         }
@@ -410,13 +400,7 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
                 let ctx = base.for_grasp(&g, approach_prefs(&g));
                 // The caller's attention point binds; the detector's is one of two starts.
                 let centre = hints.attention_point.is_none().then(|| {
-                    let rule = type_rule::approach_by_rule(
-                        &shape,
-                        g.grasp_type,
-                        points,
-                        up.as_ref(),
-                        hints.viewpoint.as_ref(),
-                    );
+                    let rule = rule_approach_for(g.grasp_type);
                     type_rule::attention_point_by_rule(&shape, points, &rule)
                 });
                 let (oppositions, ok, s1, reason) =

@@ -23,8 +23,8 @@
 //!
 //! Candidates ([`order`]): up to four stage-1 oppositions (from the attention point and the
 //! surface point over the centre of mass, `dual_stage::opposition_stage_about`) and the best
-//! moved to the height of the estimated centre of mass, each also with the thumb on the other
-//! side × the approach preferences (−n_att, the rule's approach, −up, −z; each made
+//! moved to the height of the estimated centre of mass (these two also with the thumb on the
+//! other side) × the approach preferences (−n_att, the rule's approach, −up, −z; each made
 //! perpendicular to the opposition) × turns of 0, ±30° and ±60° about the opposition line (a
 //! palm opposition: rolls about it), in that order of preference; at most
 //! `options.final_candidates` are

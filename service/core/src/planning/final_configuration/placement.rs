@@ -28,10 +28,10 @@ const FINGERTIP_DEPTH: f64 = 0.01;
 
 /// The world frame a pre-shape's grasp frame is put on: x closing, z approach, the origin on
 /// the opposition's midpoint (`direction`: the approach of a finger opposition, the wrap axis
-/// of a palm opposition; made perpendicular to the opposition). With three or more fingers it moves across the fingers (y) onto
-/// the estimated centre of mass, and along the closing axis too when the object fits in the
-/// pre-shape's opening there (`extent_x`): balanced fingers, no moment from the weight about
-/// the grasp. An object wider than the hand opens is grasped where the opposition is (a rim, an
+/// of a palm opposition; made perpendicular to the opposition). With three or more fingers it
+/// moves across the fingers (y) onto the estimated centre of mass, and along the closing axis
+/// too when the object fits in the pre-shape's opening there (`extent_x`): balanced fingers, no
+/// moment from the weight about the grasp. An object wider than the hand opens is grasped where the opposition is (a rim, an
 /// edge); so is a two-finger pinch, whose opposition is the grasp (as for the P-Grip).
 pub fn target_frame(
     pre: &PreShape,
