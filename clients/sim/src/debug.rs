@@ -79,8 +79,9 @@ pub(crate) fn forces(trial: &Trial, phase: &str, touch: &[f64], target: &[f64]) 
 }
 
 /// With GRASPD_SIM_DEBUG_DIR set, appends how deep each hand body is in the object at the
-/// current (kinematically posed) state to `forces.txt`: how far the plan's touch and squeeze
-/// are from the true surface.
+/// current (kinematically posed) state to `forces.txt`, and the gap to it of every hand body
+/// within 3 cm (negative: inside): how far the plan's touch and squeeze are from the true
+/// surface.
 pub(crate) fn penetration(trial: &Trial, phase: &str) {
     let Some(dir) = std::env::var_os("GRASPD_SIM_DEBUG_DIR") else {
         return;
@@ -100,6 +101,34 @@ pub(crate) fn penetration(trial: &Trial, phase: &str) {
     for (b, d) in &deepest {
         text += &format!("  {b}: {:.1} mm\n", d * 1e3);
     }
+    // The gap of every hand body within 3 cm of the object (negative: inside).
+    let bodyof = m.geom_bodyid().to_vec();
+    let obj = trial.scene.object_bodies[0];
+    let mut data = m.make_data();
+    data.qpos_mut().copy_from_slice(trial.data.qpos());
+    data.forward();
+    let mut nearest: std::collections::BTreeMap<String, f64> = Default::default();
+    for g in 0..bodyof.len() {
+        if !trial.scene.hand_bodies[bodyof[g] as usize] {
+            continue;
+        }
+        for o in (0..bodyof.len()).filter(|&o| bodyof[o] as usize == obj) {
+            let d = data.geom_distance(g, o, 0.03, None);
+            if d < 0.03 {
+                let name = m
+                    .id_to_name(MjtObjBase::mjOBJ_BODY, bodyof[g] as usize)
+                    .unwrap_or_default()
+                    .to_string();
+                let e = nearest.entry(name).or_insert(f64::INFINITY);
+                *e = e.min(d);
+            }
+        }
+    }
+    text += "  gaps (mm):";
+    for (b, d) in &nearest {
+        text += &format!(" {b} {:.1}", d * 1e3);
+    }
+    text += "\n";
     let path = std::path::Path::new(&dir).join("forces.txt");
     let old = std::fs::read_to_string(&path).unwrap_or_default();
     let _ = std::fs::write(path, old + &text);

@@ -210,8 +210,9 @@ fn proposals_clear_the_plane_and_come_ranked() {
 /// inward normal (−25 %, +35 %: a linkage takes one path step, least squares over its
 /// contacts, so its firmest contact may go further), every finger that flexes against the object presses inward (the
 /// balanced grip gives each finger its share of the force, so a stiff finger with a short lever
-/// moves little: `planning/grip_forces.rs`), none lifts off by more than half the depth, and
-/// the squeezed hand stays out of the table.
+/// moves little: `planning/grip_forces.rs`), none lifts off by more than half the depth or
+/// slides across the surface further than the depth, and the squeezed hand stays out of the
+/// table.
 #[test]
 fn the_squeeze_presses_contacts_by_the_set_depth_and_not_the_table() {
     for depth in [0.005, 0.02] {
@@ -249,10 +250,18 @@ fn the_squeeze_presses_contacts_by_the_set_depth_and_not_the_table() {
                 }
                 let local = (root * fk_g.body_poses[b]).inverse() * c.position;
                 let at_squeeze: Point3<f64> = root * fk_s.body_poses[b] * local;
+                let moved = at_squeeze - c.position;
+                let pressed = moved.dot(&-c.normal);
+                let slide = (moved + c.normal * pressed).norm();
+                assert!(
+                    slide <= depth + 1e-3,
+                    "{file} {}: the squeeze slides a contact {slide} m across the surface",
+                    c.finger
+                );
                 per_finger
                     .entry(c.finger.as_str())
                     .or_default()
-                    .push((at_squeeze - c.position).dot(&-c.normal));
+                    .push(pressed);
             }
             println!("{file} depth {depth}: contacts moved {per_finger:.4?}");
             assert!(!per_finger.is_empty(), "{file}");

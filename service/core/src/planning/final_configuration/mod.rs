@@ -16,8 +16,9 @@
 //!    touching joints.
 //! 3. **Squeeze** ([`squeeze`]): each touching finger closed further so that its contacts move up to
 //!    `squeeze_depth` into the object along their normals, none outward and no joint opening
-//!    (a small linear program per finger; linked groups by one path step) — the position
-//!    servos' error becomes the grip force; the pre-grasp joints are the pre-shape.
+//!    (a small linear program per finger; linked groups by one path step), scaled back until
+//!    no contact slides across the surface further than the depth — the position servos'
+//!    error becomes the grip force; the pre-grasp joints are the pre-shape.
 //! 4. **Judge**: feasible when both sides touch, S ≥ ε (Eq 5.3, GII about the contacts; three
 //!    or more contacts with [`FIRM_ROBUSTNESS`] may stand in for it; two contacts on a line
 //!    inside both friction cones), the
