@@ -148,6 +148,11 @@ impl FinalConfiguration {
             _ => return self,
         };
         let cps = self.contact_points();
+        tracing::trace!(
+            centre = ?ctx.shape.center.coords.as_slice(),
+            contacts = ?cps.iter().map(|c| (c.position.coords.as_slice().to_vec(), c.normal.as_slice().to_vec())).collect::<Vec<_>>(),
+            "contacts rated"
+        );
         self.robustness = match ctx.robustness_above(&cps, floor - self.score) {
             Ok(r) => r,
             Err(r) => {
@@ -622,6 +627,7 @@ fn judge_with(
     let assessment = ctx.assess(&[oc1], &[oc2], ctx.options.stage2_weights);
     let score = 0.1 * assessment.q.max(-1.0) - 2.0 * closed.push;
     tracing::debug!(
+        opposition = ?(oc1, oc2),
         approach = ?[a.x, a.y, a.z],
         yaw_deg = yaw.to_degrees(),
         s0,
