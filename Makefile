@@ -65,8 +65,8 @@ models-tactile:
 # The grasp benchmark in MuJoCo (clients/sim/README.md, docs/sim-benchmark.md): starts a release
 # graspd on loopback and runs graspd-sim bench with the Robotiq 2F-85, Barrett, Shadow and Allegro
 # hands, 20 trials per cell with placements within ±10 cm: the Table 5.2 objects from a single
-# RGB-D view, all 13 shared objects, and the Table 5.2 objects from 3 fused views (about 25
-# minutes on two cores); results in sim-results/. SIM_ARGS="--trials 5 ..." runs one bench with
+# RGB-D view, all 13 shared objects, and the Table 5.2 objects from 3 fused views (about 45
+# minutes on two cores: 14 + 19 + 14 on 2026-12-03); results in sim-results/. SIM_ARGS="--trials 5 ..." runs one bench with
 # those arguments instead.
 # `make sim-stabilize` runs the tactile closed loop against a constant-force baseline under an
 # added load (graspd-sim stabilize; results in sim-results/).
