@@ -65,8 +65,15 @@ fn moved_branches(trial: &Trial) -> Vec<Vec<Vec<bool>>> {
         .collect()
 }
 
-/// Closes the hand from its current commands to `squeeze` through `touch` (module doc).
-pub fn close(trial: &mut Trial, touch: &[f64], squeeze: &[f64], guarded: bool) {
+/// Closes the hand from its current commands to `squeeze` through `touch` (module doc); returns
+/// the object's position when the touching commands are reached (before the squeeze), so a
+/// record can tell a push while closing from one while squeezing.
+pub fn close(
+    trial: &mut Trial,
+    touch: &[f64],
+    squeeze: &[f64],
+    guarded: bool,
+) -> nalgebra::Point3<f64> {
     trial.data.forward();
     let branches = if guarded {
         moved_branches(trial)
@@ -76,6 +83,7 @@ pub fn close(trial: &mut Trial, touch: &[f64], squeeze: &[f64], guarded: bool) {
     let open: Vec<f64> = trial.data.ctrl().to_vec();
     let nbody = trial.scene.model.ffi().nbody as usize;
     let mut stopped: Vec<Option<f64>> = vec![None; open.len()];
+    let mut at_touch = trial.object_position();
     for (k, phase) in ["closing_1", "closing_2", "closing_3"].iter().enumerate() {
         trial.run(CLOSE_S / 3.0, |t, f| {
             let f = (k as f64 + f) / 3.0;
@@ -107,6 +115,10 @@ pub fn close(trial: &mut Trial, touch: &[f64], squeeze: &[f64], guarded: bool) {
             }
         });
         debug::snapshot(trial, phase);
+        if k == 1 {
+            at_touch = trial.object_position();
+        }
     }
     trial.run(CLOSE_SETTLE_S, |_, _| {});
+    at_touch
 }

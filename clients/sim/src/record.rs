@@ -73,9 +73,14 @@ pub struct TrialRecord {
     pub planned_positions: Vec<[f64; 3]>,
     pub gravity_resistance: Option<f64>,
     pub gii: Option<f64>,
-    /// How far the object moved during the approach and during the close, mm, and how much it
-    /// turned during the close, degrees; the hand bodies touching it after closing.
+    /// How far the object moved during the approach, during the close up to the touching
+    /// commands and during the whole close (squeeze included), mm, and how much it turned
+    /// during the close, degrees; the hand bodies touching it after closing.
     pub moved_approach_mm: Option<f64>,
+    /// How deep the deepest hand body lies in the true object with the hand posed at the plan's
+    /// grasp (no physics), mm: what the single view and its completion got wrong.
+    pub planned_depth_mm: Option<f64>,
+    pub moved_touch_mm: Option<f64>,
     pub moved_close_mm: Option<f64>,
     pub turned_close_deg: Option<f64>,
     pub touching_bodies: Vec<String>,
@@ -118,6 +123,8 @@ impl TrialRecord {
             gravity_resistance: None,
             gii: None,
             moved_approach_mm: None,
+            planned_depth_mm: None,
+            moved_touch_mm: None,
             moved_close_mm: None,
             turned_close_deg: None,
             touching_bodies: Vec::new(),

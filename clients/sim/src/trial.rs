@@ -251,6 +251,13 @@ impl<'a> Trial<'a> {
         self.hand_bodies_near_object().len()
     }
 
+    /// Deepest penetration of a hand body into object 0, m (0 when none touches it).
+    pub fn deepest_object_penetration(&self) -> f64 {
+        self.hand_contacts_with_object()
+            .map(|(i, _)| -self.data.contact()[i].dist)
+            .fold(0.0, f64::max)
+    }
+
     /// Deepest penetration of a hand geom into the table, m (0 when none touches).
     pub fn deepest_table_penetration(&self) -> f64 {
         let table = self.scene.table_geom;
@@ -463,19 +470,26 @@ pub fn pre_grasp_and_approach(
     let grasp = trial.planned_commands(&joints);
     let closed = trial.planned_commands(&squeeze_joints);
     let pre_root = pre * hand_pose.inverse() * root;
-    if std::env::var_os("GRASPD_SIM_DEBUG_DIR").is_some() {
-        // The plan as graspd means it: the hand posed at the grasp and the squeeze, no physics.
-        let saved = trial.data.qpos().to_vec();
-        for (name, q) in [("planned", &joints), ("squeeze", &squeeze_joints)] {
-            trial.place_base(&root);
-            trial.set_hand_joints(q);
-            trial.data.forward();
-            debug::penetration(trial, name);
-            debug::snapshot(trial, name);
+    // The plan as graspd means it: the hand posed at the grasp (and, for the debug pictures, the
+    // squeeze), no physics. How deep it lies in the true object measures the plan's geometry:
+    // what a single view and its completion got wrong.
+    let saved = trial.data.qpos().to_vec();
+    let debug = std::env::var_os("GRASPD_SIM_DEBUG_DIR").is_some();
+    for (name, q) in [("planned", &joints), ("squeeze", &squeeze_joints)] {
+        if name == "squeeze" && !debug {
+            break;
         }
-        trial.data.qpos_mut().copy_from_slice(&saved);
+        trial.place_base(&root);
+        trial.set_hand_joints(q);
         trial.data.forward();
+        if name == "planned" {
+            rec.planned_depth_mm = Some(trial.deepest_object_penetration() * 1e3);
+        }
+        debug::penetration(trial, name);
+        debug::snapshot(trial, name);
     }
+    trial.data.qpos_mut().copy_from_slice(&saved);
+    trial.data.forward();
     trial.set_hand_joints(if pre_joints.is_empty() {
         &joints
     } else {
@@ -530,12 +544,13 @@ fn execute(
     };
     // Close (crate::closing): guarded unless the options ask for the open loop.
     let (before_p, before_q) = (trial.object_position(), trial.object_orientation());
-    crate::closing::close(trial, &grasp, &closed, opts.guarded_close);
+    let at_touch = crate::closing::close(trial, &grasp, &closed, opts.guarded_close);
     debug::snapshot(trial, "closed");
     debug::forces(trial, "closed", &grasp, &closed);
     let touching = trial.hand_bodies_touching();
     rec.contact_bodies = Some(touching);
     rec.moved_close_mm = Some((trial.object_position() - before_p).norm() * 1e3);
+    rec.moved_touch_mm = Some((at_touch - before_p).norm() * 1e3);
     rec.turned_close_deg = Some(before_q.angle_to(&trial.object_orientation()).to_degrees());
     rec.touching_bodies = trial.hand_body_names_touching();
     if touching < 2 {

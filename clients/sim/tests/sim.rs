@@ -212,6 +212,15 @@ fn a_robotiq_trial_on_the_tomato_soup_can_succeeds_against_graspd() {
     assert_eq!(rec.type_source.as_deref(), Some("model"));
     assert!(rec.final_height.unwrap() > 0.09, "{:?}", rec.final_height);
     assert!(rec.contact_bodies.unwrap() >= 2);
+    // The plan's geometry is right from one view of a can: posed at the grasp without physics
+    // the jaws lie within 3 mm of the true surface, and the can stands still until they touch.
+    assert!(
+        rec.planned_depth_mm.unwrap() < 3.0,
+        "{:?}",
+        rec.planned_depth_mm
+    );
+    let (touch, close) = (rec.moved_touch_mm.unwrap(), rec.moved_close_mm.unwrap());
+    assert!(touch < 5.0 && close < 20.0, "{touch} {close}");
 
     let out = tempdir();
     let report = run_bench(

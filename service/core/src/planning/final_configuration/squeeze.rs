@@ -41,7 +41,24 @@ pub(super) fn squeeze_joints(
     frame: &GripFrame,
 ) -> Result<Vec<f64>, FieldError> {
     let q = unlimited_squeeze(model, sweep, closed, contacts, depth, frame)?;
-    limit_slide(model, sweep, closed, contacts, q, depth)
+    let q = limit_slide(model, sweep, closed, contacts, q, depth)?;
+    if tracing::enabled!(tracing::Level::TRACE) {
+        let travel = contact_travel(model, sweep, closed, contacts, &q)?;
+        let text: Vec<String> = contacts
+            .iter()
+            .zip(&travel)
+            .map(|(c, (press, slide))| {
+                format!(
+                    "{:?}: press {:.1} mm slide {:.1} mm",
+                    c.finger,
+                    press * 1e3,
+                    slide * 1e3
+                )
+            })
+            .collect();
+        tracing::trace!(contacts = ?text, "squeeze");
+    }
+    Ok(q)
 }
 
 /// Each contact's motion from the touching joints to `q` (root frame, carried with its link):
@@ -140,6 +157,7 @@ fn unlimited_squeeze(
     if let Some(q) = balanced_squeeze(model, sweep, closed, contacts, depth, frame)? {
         return Ok(q);
     }
+    tracing::trace!("squeeze: the contacts cannot balance; each finger pressed on its own");
     let to_root = sweep.root_in_world.inverse();
     let fk0 = hand.tree.forward(&closed.joints)?;
     // Per contact: its point in its link's frame and its inward normal (root frame).
