@@ -77,13 +77,13 @@ pub struct TrialRecord {
     /// commands and during the whole close (squeeze included), mm, and how much it turned
     /// during the close, degrees; the hand bodies touching it after closing.
     pub moved_approach_mm: Option<f64>,
-    /// How deep the deepest hand body lies in the true object with the hand posed at the plan's
-    /// grasp (no physics), mm: what the single view and its completion got wrong.
-    pub planned_depth_mm: Option<f64>,
     pub moved_touch_mm: Option<f64>,
     pub moved_close_mm: Option<f64>,
     pub turned_close_deg: Option<f64>,
     pub touching_bodies: Vec<String>,
+    /// How deep the deepest hand body lies in the true object with the hand posed at the plan's
+    /// grasp (no physics), mm: what the single view and its completion got wrong.
+    pub planned_depth_mm: Option<f64>,
     /// The six-direction gravity test ([`crate::gravity`], order ±x, ±y, ±z): whether each
     /// direction held; None when the object was not held after the hold or the test was off.
     pub gravity_held: Option<[bool; 6]>,
@@ -123,11 +123,11 @@ impl TrialRecord {
             gravity_resistance: None,
             gii: None,
             moved_approach_mm: None,
-            planned_depth_mm: None,
             moved_touch_mm: None,
             moved_close_mm: None,
             turned_close_deg: None,
             touching_bodies: Vec::new(),
+            planned_depth_mm: None,
             gravity_held: None,
             placement: place,
             snapshot: None,
