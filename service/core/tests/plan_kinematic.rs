@@ -64,7 +64,8 @@ fn posed(
 /// Each shared hand on the Table 5.2 objects: the three joint sets name every joint of the model
 /// once and stay inside its limits; mounting the model at root_pose at the planned joints puts
 /// its hand frame on hand_pose; the pre-grasp is hand_pose backed off along the unit approach;
-/// feasible plans touch the object on both sides, clear of the table (1 mm) at the grasp, the
+/// feasible plans touch the object on both sides (with three fingers or the palm, for a hand
+/// that has a third finger), clear of the table (1 mm) at the grasp, the
 /// squeeze and the pre-grasp, and keep the object's points out of the hand (but for what a
 /// linkage's first finger pushes).
 #[test]
@@ -122,6 +123,18 @@ fn shared_hands_plan_executable_grasps_on_ycb_views() {
             }
             feasible += 1;
             assert!(p.contacts.len() >= 2, "{file} {object:?}");
+            // A hand with a third finger does not hold with two fingers each driven on its own
+            // (their squeeze does not balance): three fingers, or the palm, touch.
+            if m.hand.fingers.len() >= 3 {
+                let mut touching: Vec<&str> =
+                    p.contacts.iter().map(|c| c.finger.as_str()).collect();
+                touching.sort_unstable();
+                touching.dedup();
+                assert!(
+                    touching.len() >= 3,
+                    "{file} {object:?}: feasible with only {touching:?} touching"
+                );
+            }
             // S ≥ ε, or three or more contacts that resist a firm force in every direction.
             assert!(
                 p.quality.gii >= PlannerOptions::default().epsilon

@@ -39,6 +39,9 @@ pub struct SweepContact {
     pub normal: Vector3<f64>,
     /// Distance from the link's surface to `position` (how well the link meets the contact), m.
     pub gap: f64,
+    /// Length of the mean of the patch's unit normals: 1 for a flat patch, about 0.7 for one
+    /// astride a box's edge (its mean normal is then neither face's).
+    pub coherence: f64,
 }
 
 /// The result of closing.
@@ -294,6 +297,15 @@ pub fn close_fingers(
     })
 }
 
+/// The unit mean of a patch's unit normals and its coherence, the length of their mean (1 for
+/// a flat patch; cos 45° = 0.71 for one half on each face of a box's edge); None for an empty
+/// patch or normals that cancel.
+pub fn mean_normal(normals: impl Iterator<Item = Vector3<f64>>) -> Option<(Vector3<f64>, f64)> {
+    let (sum, n) = normals.fold((Vector3::zeros(), 0usize), |(s, n), v| (s + v, n + 1));
+    let unit = sum.try_normalize(1e-9)?;
+    Some((unit, sum.norm() / n as f64))
+}
+
 /// The contact patch of `body`'s pieces: the object points within [`PATCH_MARGIN`], their mean
 /// position and normal, and the nearest point.
 pub fn patch(
@@ -327,11 +339,10 @@ pub fn patch(
             .sum::<Vector3<f64>>()
             / n,
     );
-    let normal = pts
-        .iter()
-        .map(|&(i, _)| object.normals.get(object.source[i]))
-        .sum::<Vector3<f64>>()
-        .try_normalize(1e-9)?;
+    let (normal, coherence) = mean_normal(
+        pts.iter()
+            .map(|&(i, _)| object.normals.get(object.source[i])),
+    )?;
     let point = pts
         .iter()
         .min_by(|a, b| a.1.total_cmp(&b.1))
@@ -347,5 +358,43 @@ pub fn patch(
         position,
         normal,
         gap,
+        coherence,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A patch on one face is coherent; one astride a box's edge, half on each face, has the
+    /// mean normal at 45° and coherence cos 45°; a fingertip patch of ±20° on a ball keeps
+    /// coherence above the edge threshold (the mean of cos θ over a cap of half-angle α is
+    /// cos²(α/2) = 0.97); normals that cancel give none.
+    #[test]
+    fn coherence_tells_a_face_from_an_edge() {
+        let x = Vector3::x();
+        let z = Vector3::z();
+        let (n, c) = mean_normal([x, x, x].into_iter()).unwrap();
+        assert!((n - x).norm() < 1e-12 && (c - 1.0).abs() < 1e-12);
+        let (n, c) = mean_normal([x, x, z, z].into_iter()).unwrap();
+        assert!((n - (x + z).normalize()).norm() < 1e-12);
+        assert!((c - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-12, "{c}");
+        assert!(c < super::super::EDGE_COHERENCE);
+        // A cap of half-angle 20° sampled evenly in solid angle (rings of equal area).
+        let alpha = 20f64.to_radians();
+        let mut cap = Vec::new();
+        for i in 0..200 {
+            let cos_t = 1.0 - (1.0 - alpha.cos()) * (i as f64 + 0.5) / 200.0;
+            let sin_t = (1.0 - cos_t * cos_t).sqrt();
+            for k in 0..12 {
+                let phi = std::f64::consts::TAU * k as f64 / 12.0;
+                cap.push(Vector3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t));
+            }
+        }
+        let (_, c) = mean_normal(cap.into_iter()).unwrap();
+        assert!((c - (alpha / 2.0).cos().powi(2)).abs() < 1e-3, "{c}");
+        assert!(c > super::super::EDGE_COHERENCE);
+        assert!(mean_normal([x, -x].into_iter()).is_none());
+        assert!(mean_normal(std::iter::empty()).is_none());
+    }
 }

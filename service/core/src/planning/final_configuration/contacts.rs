@@ -27,6 +27,28 @@ pub(super) fn outside_friction_cone(
     }
 }
 
+/// For contacts on exactly two fingers and nothing else, of a hand with a third finger, that no
+/// linkage joins: those two fingers. Each presses with what its own servo gives, rarely equal
+/// and opposite, and the squeeze pushes the object toward the weaker (the Shadow's thumb, at
+/// 2–3 N·m, against its index finger at 1 N·m: none of 19 such plans held in MuJoCo); a
+/// gripper's jaws on one motor press alike, and a third finger or the palm takes up the
+/// difference.
+pub(super) fn unlinked_pair(
+    model: &KinematicModel,
+    contacts: &[SweepContact],
+) -> Option<(usize, usize)> {
+    if model.hand.fingers.len() < 3 || contacts.iter().any(|c| c.finger.is_none()) {
+        return None;
+    }
+    let mut fingers: Vec<usize> = contacts.iter().filter_map(|c| c.finger).collect();
+    fingers.sort_unstable();
+    fingers.dedup();
+    let [a, b] = fingers[..] else {
+        return None;
+    };
+    (!model.synergy.group_of(a).contains(&b)).then_some((a, b))
+}
+
 /// Contacts of the bodies that belong to no finger (the palm, the hand's base) at `q`.
 pub(super) fn palm_contacts(
     model: &KinematicModel,
@@ -73,6 +95,7 @@ mod tests {
             position: Point3::new(0.05 * c, 0.05 * s, 0.0),
             normal: Vector3::new(c, s, 0.0),
             gap: 0.0,
+            coherence: 1.0,
         }
     }
 

@@ -51,7 +51,7 @@ use super::search_context::{PLANE_TOLERANCE, SearchContext};
 use crate::error::FieldError;
 use crate::hand::kinematics::PreShape;
 use closing_sweep::{SweepContact, SweepHand, close_fingers};
-use contacts::{outside_friction_cone, palm_contacts};
+use contacts::{outside_friction_cone, palm_contacts, unlinked_pair};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 pub use object_view::{COLLISION_CELL, ObjectView};
 use order::candidate_order;
@@ -78,6 +78,10 @@ pub const FIRM_ROBUSTNESS: f64 = 0.8;
 /// 109 → 111, Allegro 116 → 123 of 160; the planner bench's feasible Shadow 23 → 30 and Robotiq
 /// 29 → 34 of 40, at 1.5–2.5 times their median planning time.
 const YAWS_DEG: [f64; 4] = [20.0, -20.0, 40.0, -40.0];
+/// A contact patch whose unit normals' mean is shorter than this lies astride an edge (a box's
+/// rim): its mean normal is neither face's, and a fingertip there rolls off the edge when the
+/// hand squeezes, so the robustness does not count it.
+pub const EDGE_COHERENCE: f64 = 0.9;
 /// Times the hand is raised when the closed fingers reach into the table.
 const MAX_RAISES: usize = 2;
 /// How far each finger's contacts may stand off the object in the pre-grasp opening, m,
@@ -127,9 +131,12 @@ impl FinalConfiguration {
         (self.feasible, self.two_sided, self.score)
     }
 
+    /// The contacts the robustness counts: those on a face, not astride an edge
+    /// ([`EDGE_COHERENCE`]).
     fn contact_points(&self) -> Vec<ContactPoint> {
         self.contacts
             .iter()
+            .filter(|c| c.coherence >= EDGE_COHERENCE)
             .map(|c| ContactPoint {
                 position: c.position,
                 normal: c.normal,
@@ -151,6 +158,7 @@ impl FinalConfiguration {
         tracing::trace!(
             centre = ?ctx.shape.center.coords.as_slice(),
             contacts = ?cps.iter().map(|c| (c.position.coords.as_slice().to_vec(), c.normal.as_slice().to_vec())).collect::<Vec<_>>(),
+            coherence = ?self.contacts.iter().map(|c| c.coherence).collect::<Vec<_>>(),
             "contacts rated"
         );
         self.robustness = match ctx.robustness_above(&cps, floor - self.score) {
@@ -180,7 +188,7 @@ impl FinalConfiguration {
         if !self.feasible
             && self.short_of_epsilon_only
             && !self.cut
-            && self.contacts.len() >= 3
+            && cps.len() >= 3
             && self.robustness.weakest >= FIRM_ROBUSTNESS
         {
             self.feasible = true;
@@ -604,6 +612,12 @@ fn judge_with(
         Some(format!(
             "the line between the two contacts leaves the {end} contact's friction cone (μ = {})",
             ctx.options.friction
+        ))
+    } else if let Some((f1, f2)) = unlinked_pair(model, &contacts) {
+        Some(format!(
+            "only the {} and the {} touch, each driven on its own: their squeeze does not \
+             balance without a third contact",
+            hand.fingers[f1].name, hand.fingers[f2].name
         ))
     } else if gii < ctx.options.epsilon {
         Some(format!(
