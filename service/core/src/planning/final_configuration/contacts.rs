@@ -37,10 +37,23 @@ pub(super) fn unlinked_pair(
     model: &KinematicModel,
     contacts: &[SweepContact],
 ) -> Option<(usize, usize)> {
-    if model.hand.fingers.len() < 3 || contacts.iter().any(|c| c.finger.is_none()) {
+    if contacts.iter().any(|c| c.finger.is_none()) {
         return None;
     }
-    let mut fingers: Vec<usize> = contacts.iter().filter_map(|c| c.finger).collect();
+    let fingers: Vec<usize> = contacts.iter().filter_map(|c| c.finger).collect();
+    unlinked_fingers(model, &fingers)
+}
+
+/// Whether `fingers` (with repeats) are exactly two fingers that no linkage joins, of a hand
+/// with a third ([`unlinked_pair`]).
+pub(super) fn unlinked_fingers(
+    model: &KinematicModel,
+    fingers: &[usize],
+) -> Option<(usize, usize)> {
+    if model.hand.fingers.len() < 3 {
+        return None;
+    }
+    let mut fingers = fingers.to_vec();
     fingers.sort_unstable();
     fingers.dedup();
     let [a, b] = fingers[..] else {

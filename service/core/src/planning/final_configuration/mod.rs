@@ -51,7 +51,7 @@ use super::search_context::{PLANE_TOLERANCE, SearchContext};
 use crate::error::FieldError;
 use crate::hand::kinematics::PreShape;
 use closing_sweep::{SweepContact, SweepHand, close_fingers};
-use contacts::{outside_friction_cone, palm_contacts, unlinked_pair};
+use contacts::{outside_friction_cone, palm_contacts, unlinked_fingers, unlinked_pair};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 pub use object_view::{COLLISION_CELL, ObjectView};
 use order::candidate_order;
@@ -262,11 +262,18 @@ pub fn search(
     let mut judged: Vec<FinalConfiguration> = Vec::new();
     // Candidates in order of preference, at most `final_candidates`; while none is feasible
     // the search goes on through the rest of the order, up to WIDENING times as many (method.md
-    // §3: widen the search before answering infeasible).
+    // §3: widen the search before answering infeasible) — but not for two fingers each driven
+    // on its own, which only the palm could make feasible (`unlinked_pair`): the next grasp
+    // type is the better search (the Barrett's median planning time 23 → 62 ms with it).
+    let widening = if unlinked_fingers(model, &grasp.taking_part).is_some() {
+        1
+    } else {
+        WIDENING
+    };
     for (k, (opposition, approach)) in order.iter().enumerate() {
         let feasible_so_far = judged.iter().any(|c| c.feasible);
         if k >= ctx.options.final_candidates
-            && (feasible_so_far || k >= WIDENING * ctx.options.final_candidates)
+            && (feasible_so_far || k >= widening * ctx.options.final_candidates)
         {
             break;
         }
