@@ -221,7 +221,8 @@ fn proposals_clear_the_plane_and_come_ranked() {
 /// `squeeze_depth`: each finger contact is carried with the link it lies on from the grasp
 /// joints to the squeeze joints; the hand's firmest contact goes about that far along its
 /// inward normal (−25 %, +35 %: a linkage takes one path step, least squares over its
-/// contacts, so its firmest contact may go further), every finger that flexes against the object presses inward (the
+/// contacts, so its firmest contact may go further; less when a contact would slide further
+/// than the depth and the squeeze is scaled back), every finger that flexes against the object presses inward (the
 /// balanced grip gives each finger its share of the force, so a stiff finger with a short lever
 /// moves little: `planning/grip_forces.rs`), none lifts off by more than half the depth or
 /// slides across the surface further than the depth, and the squeezed hand stays out of the
@@ -243,6 +244,7 @@ fn the_squeeze_presses_contacts_by_the_set_depth_and_not_the_table() {
             let fk_s = m.hand.tree.forward(&qs).unwrap();
             let root: Isometry3<f64> = pose * m.hand.hand_frame_in_root(&qg).unwrap().inverse();
             let mut per_finger: std::collections::BTreeMap<&str, Vec<f64>> = Default::default();
+            let mut largest_slide: f64 = 0.0;
             for c in p.contacts.iter().filter(|c| c.finger != "palm") {
                 let b = m.hand.tree.body_index(c.link.as_deref().unwrap()).unwrap();
                 // A link no joint of the chain flexes (a knuckle) rests like the palm, and a
@@ -266,6 +268,7 @@ fn the_squeeze_presses_contacts_by_the_set_depth_and_not_the_table() {
                 let moved = at_squeeze - c.position;
                 let pressed = moved.dot(&-c.normal);
                 let slide = (moved + c.normal * pressed).norm();
+                largest_slide = largest_slide.max(slide);
                 assert!(
                     slide <= depth + 1e-3,
                     "{file} {}: the squeeze slides a contact {slide} m across the surface",
@@ -276,15 +279,21 @@ fn the_squeeze_presses_contacts_by_the_set_depth_and_not_the_table() {
                     .or_default()
                     .push(pressed);
             }
-            println!("{file} depth {depth}: contacts moved {per_finger:.4?}");
+            println!(
+                "{file} depth {depth}: contacts moved {per_finger:.4?}, slid {largest_slide:.4} at most"
+            );
             assert!(!per_finger.is_empty(), "{file}");
             let firmest = per_finger
                 .values()
                 .flatten()
                 .copied()
                 .fold(f64::NEG_INFINITY, f64::max);
+            // Held back by the slide limit (a contact slides the whole depth), the whole hand's
+            // squeeze is scaled toward the touch, and the firmest contact presses less.
+            let held_back = largest_slide >= 0.95 * depth;
             assert!(
-                firmest >= 0.75 * depth && firmest <= 1.35 * depth,
+                (firmest >= 0.75 * depth || (held_back && firmest > 0.0))
+                    && firmest <= 1.35 * depth,
                 "{file}: the squeeze presses {firmest} m at most, not {depth}"
             );
             for (finger, moved) in &per_finger {
