@@ -184,7 +184,8 @@ impl FinalConfiguration {
         }
         // S (Eq 5.3) measures how evenly the contacts resist wrenches, not whether they hold:
         // three or more contacts that resist a firm force at the centre of mass in every
-        // direction hold the object whatever S says.
+        // direction hold the object whatever S says (three on faces: an edge contact's normal
+        // is a guess, `EDGE_COHERENCE`).
         if !self.feasible
             && self.short_of_epsilon_only
             && !self.cut
@@ -264,7 +265,8 @@ pub fn search(
     // the search goes on through the rest of the order, up to WIDENING times as many (method.md
     // §3: widen the search before answering infeasible) — but not for two fingers each driven
     // on its own, which only the palm could make feasible (`unlinked_pair`): the next grasp
-    // type is the better search (the Barrett's median planning time 23 → 62 ms with it).
+    // type is the better search (planner bench, Barrett median: about 60 ms widened, 45 not,
+    // 19–23 before the two-finger rule; every simulated Table 5.2 trial ended the same).
     let widening = if unlinked_fingers(model, &grasp.taking_part).is_some() {
         1
     } else {
