@@ -22,7 +22,7 @@
 //! most robust (`quality.robustness`) is executed anyway (the record keeps `feasible` and the
 //! reason): the simulation, not the planner's own check, decides. (The first plan, executed
 //! before: Table 5.2, 20 trials per cell, paired: Allegro 130 → 134, Barrett 142 → 143, Shadow
-//! 123 → 126 of 160 — the banana and the Shadow's tuna can, whose plans are all infeasible.)
+//! 123 → 126 of 160 — the banana and the Shadow's tuna can, whose plans are mostly infeasible.)
 //!
 //! Success: after the shake the object is off the table (no contact with it), touches the hand,
 //! and its centre of mass is at least [`LIFTED_M`] above where it was (an object hanging tilted
@@ -348,6 +348,7 @@ pub fn run_trial(
         },
         grasp_type: opts.grasp_type,
     };
+    let robustness = |r: &PlanResult| r.response.quality.as_ref().map_or(0.0, |q| q.robustness);
     let mut plan = service.plan(hand, &image, &extra, cloud.as_deref(), seed, ask);
     let mut attempts = 1;
     let mut extra_ms = 0.0;
@@ -363,8 +364,6 @@ pub fn run_trial(
         attempts += 1;
         if let Ok(p) = &again {
             extra_ms += p.latency * 1e3;
-            let robustness =
-                |r: &PlanResult| r.response.quality.as_ref().map_or(0.0, |q| q.robustness);
             let better = match &plan {
                 Ok(first) => p.response.feasible || robustness(p) > robustness(first),
                 Err(_) => true,
