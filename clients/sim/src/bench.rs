@@ -47,6 +47,9 @@ pub struct HandSummary {
     pub gravity_six: usize,
     /// The squeeze depth graspd was asked for (derived from the model, `hand.rs`), m.
     pub squeeze_depth: f64,
+    /// Whether the close kept the plan's squeeze proportions within the force limits
+    /// (`hand.rs`, `closing::within_force_limits`).
+    pub balanced_grip: bool,
 }
 
 /// The whole run.
@@ -209,6 +212,7 @@ fn summarise<'a>(hand: &SimHand, recs: impl Iterator<Item = &'a TrialRecord>) ->
     HandSummary {
         gravity_six,
         squeeze_depth: hand.squeeze_depth,
+        balanced_grip: hand.balanced_grip,
         hand: hand.name.clone(),
         label: hand.label.clone(),
         successes,

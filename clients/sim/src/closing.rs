@@ -13,6 +13,9 @@
 //! planned, whatever the fingers meet (a grasp benchmark's replay, DexGraspBench's). Measured on
 //! Table 5.2 (10 trials per cell, 2026-12-02, balanced squeeze), open loop → guarded: Robotiq
 //! 68 → 68, Barrett 65 → 65, Shadow 39 → 45, Allegro 56 → 55 of 80.
+//!
+//! A hand with force to spare (`hand.rs`, balanced grip) squeezes with the plan's proportions
+//! kept within its force limits ([`within_force_limits`]) instead of the planned commands.
 
 use crate::debug;
 use crate::trial::{CLOSE_S, CLOSE_SETTLE_S, Trial};
@@ -121,4 +124,52 @@ pub fn close(
     }
     trial.run(CLOSE_SETTLE_S, |_, _| {});
     at_touch
+}
+
+/// The squeeze commands with the plan's proportions kept and the grip set by the actuators'
+/// force limits: graspd's squeeze asks each joint for a torque in proportion to its travel
+/// (one stiffness for the whole hand); here every actuator's travel from its touch is made
+/// `c·Δ/g` (g its servo gain), `c` the common scale at which the most loaded force-limited
+/// actuator asks `margin` times its limit. Unchanged when an actuator that travels has no
+/// force limit (its squeeze depth was sized for its gain) or only one actuator travels.
+pub fn within_force_limits(
+    m: &mujoco_rs::prelude::MjModel,
+    touch: &[f64],
+    squeeze: &[f64],
+    margin: f64,
+) -> Vec<f64> {
+    let (gain, limited, range) = (
+        m.actuator_gainprm(),
+        m.actuator_forcelimited(),
+        m.actuator_forcerange(),
+    );
+    let travels: Vec<usize> = (0..touch.len())
+        .filter(|&a| (squeeze[a] - touch[a]).abs() > 1e-6)
+        .collect();
+    if travels.len() < 2
+        || travels
+            .iter()
+            .any(|&a| !limited[a] || gain[a][0].abs() < 1e-9)
+    {
+        return squeeze.to_vec();
+    }
+    // The common scale, force per unit of planned travel, at which the most loaded actuator
+    // asks `margin` times its limit.
+    let c = margin
+        * travels
+            .iter()
+            .map(|&a| {
+                let limit = if (squeeze[a] - touch[a]) > 0.0 {
+                    range[a][1]
+                } else {
+                    -range[a][0]
+                };
+                limit / (squeeze[a] - touch[a]).abs()
+            })
+            .fold(f64::INFINITY, f64::min);
+    let mut out = squeeze.to_vec();
+    for &a in &travels {
+        out[a] = touch[a] + c * (squeeze[a] - touch[a]) / gain[a][0];
+    }
+    out
 }

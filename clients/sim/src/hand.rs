@@ -20,6 +20,16 @@
 //!   largest over the hand's closing servos that flex a synergy flexion joint, within
 //!   [[`MIN_SQUEEZE_DEPTH`], [`MAX_SQUEEZE_DEPTH`]]; any other unlimited servo (a tendon, an
 //!   abduction) counts at [`MIN_SQUEEZE_DEPTH`];
+//! - **balanced grip**: when every closing servo has a force limit, there are two or more, and
+//!   the weakest flexion servo among them pushes at least [`BALANCE_MARGIN`] × [`GRIP_FORCE`]
+//!   at its limit at the far end of its finger (limit · gear / lever), the close keeps the
+//!   plan's squeeze proportions within the limits (`closing::within_force_limits`): the hand
+//!   has force to spare, and servos that saturate one by one no longer push in the proportions
+//!   graspd balanced (Table 5.2, 20 trials, paired: the Barrett, 33 N, 143 → 149 of 160, the
+//!   banana 9 → 13, no object lost). A weaker hand needs all its force: the Shadow (6.5 N) went
+//!   126 → 120 at the same rule, 91 at margin 1 (its objects slipped in the lift), 114 with
+//!   half its servos at their limits and 121 with every one at least at its limit; it squeezes
+//!   as planned, its servos saturating where they must;
 //! - **graspd name**: the model's name (`<mujoco model=…>`) made a graspd name.
 
 use crate::SimError;
@@ -48,6 +58,11 @@ pub const MIN_SQUEEZE_DEPTH: f64 = 0.005;
 /// for household objects should squeeze with, whatever its servos' gains.
 pub const GRIP_FORCE: f64 = 10.0;
 
+/// A hand grips balanced within its force limits when its weakest force-limited flexion servo
+/// pushes at least this many [`GRIP_FORCE`]s at its limit at the far end of its finger; its
+/// most loaded servo is then asked this many times its limit (`closing::within_force_limits`).
+pub const BALANCE_MARGIN: f64 = 2.0;
+
 /// One closing actuator and its command range.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -74,6 +89,7 @@ struct HandToml {
     tactile_bodies: Vec<String>,
     pad_friction: Option<f64>,
     servo_gain_scale: Option<f64>,
+    balanced_grip: Option<bool>,
 }
 
 /// A simulated hand.
@@ -103,6 +119,10 @@ pub struct SimHand {
     /// Menagerie hands (kp 1 → 5), whose servos are otherwise too weak to hold 100 g. 1 keeps
     /// the model as it is.
     pub servo_gain_scale: f64,
+    /// Whether the close keeps the plan's squeeze proportions within the actuators' force
+    /// limits (module rules; `closing::within_force_limits`) instead of letting the servos
+    /// saturate one by one.
+    pub balanced_grip: bool,
 }
 
 impl SimHand {
@@ -136,6 +156,7 @@ impl SimHand {
                             tactile_bodies: Vec::new(),
                             pad_friction: None,
                             servo_gain_scale: None,
+                            balanced_grip: None,
                         },
                     )
                 } else {
@@ -183,6 +204,7 @@ impl SimHand {
             tactile_bodies: toml.tactile_bodies,
             pad_friction: toml.pad_friction,
             servo_gain_scale: gain_scale,
+            balanced_grip: toml.balanced_grip.unwrap_or(derived.balanced_grip),
         })
     }
 
@@ -198,6 +220,7 @@ struct Derived {
     root_body: String,
     actuators: Vec<ClosingActuator>,
     squeeze_depth: f64,
+    balanced_grip: bool,
 }
 
 fn derive(model_path: &Path, gain_scale: f64) -> Result<Derived, SimError> {
@@ -278,6 +301,9 @@ fn derive(model_path: &Path, gain_scale: f64) -> Result<Derived, SimError> {
     let mut actuators = Vec::new();
     let mut all_limited = true;
     let mut unlimited_depth: f64 = 0.0;
+    // Per force-limited flexion servo, what it pushes at its limit at the far end of its finger.
+    let mut far_end_force = f64::INFINITY;
+    let range = mj.actuator_forcerange();
     for a in 0..nu {
         let dl = len_closed[a] - len_open[a];
         if dl.abs() < 1e-3 {
@@ -295,6 +321,11 @@ fn derive(model_path: &Path, gain_scale: f64) -> Result<Derived, SimError> {
             closed: command(len_closed[a]),
         });
         all_limited &= limited[a];
+        if limited[a] && trn[a] == MjtTrn::mjTRN_JOINT && flexion.contains(&(trn_id[a][0] as usize))
+        {
+            let r = lever(trn_id[a][0] as usize).max(1e-3);
+            far_end_force = far_end_force.min(range[a][1].abs() * gear[a][0].abs() / r);
+        }
         if !limited[a] {
             // d = F·r² / k: the contact's travel at which the servo's joint stiffness
             // k = kp·gear² pushes F at lever r.
@@ -314,6 +345,8 @@ fn derive(model_path: &Path, gain_scale: f64) -> Result<Derived, SimError> {
             "no actuator moves when the hand closes: graspd-sim cannot drive it".into(),
         ));
     }
+    let balanced_grip =
+        all_limited && actuators.len() >= 2 && far_end_force >= BALANCE_MARGIN * GRIP_FORCE;
     Ok(Derived {
         graspd_hand: graspd_name(&hand.tree.name),
         label: hand.tree.name.clone(),
@@ -324,6 +357,7 @@ fn derive(model_path: &Path, gain_scale: f64) -> Result<Derived, SimError> {
         } else {
             unlimited_depth.clamp(MIN_SQUEEZE_DEPTH, MAX_SQUEEZE_DEPTH)
         },
+        balanced_grip,
     })
 }
 

@@ -48,6 +48,9 @@ pub struct Scene {
     pub hand_joints: Vec<(usize, String)>,
     /// Actuator ids of the hand's closing actuators with their open and closed commands.
     pub closing: Vec<(usize, f64, f64)>,
+    /// Whether the squeeze keeps the plan's proportions within the force limits
+    /// ([`SimHand::balanced_grip`]).
+    pub balanced_grip: bool,
 }
 
 /// The scene's MJCF: `hand_model` is the hand's MJCF file, `objects` the objects with their
@@ -238,6 +241,7 @@ impl Scene {
             hand_bodies,
             hand_joints,
             closing,
+            balanced_grip: hand.balanced_grip,
         })
     }
 

@@ -10,7 +10,9 @@
 //!    actuator at graspd's `pregrasp_joints` (each servo's equilibrium there) and holds 0.3 s;
 //! 4. approach: the base moves in a straight line to `root_pose` in [`APPROACH_S`];
 //! 5. close: every actuator together in [`CLOSE_S`], from the pre-grasp through the touching
-//!    `joints` (two thirds of the time) to `squeeze_joints`, then 0.4 s settle — guarded (each
+//!    `joints` (two thirds of the time) to `squeeze_joints` (kept in proportion within the
+//!    force limits for a hand with force to spare, `closing::within_force_limits`), then 0.4 s
+//!    settle — guarded (each
 //!    actuator stops where what it moves touches the object and squeezes from there), or open
 //!    loop when asked ([`crate::closing`]);
 //! 6. lift: the base rises [`LIFT_M`] in [`LIFT_S`]; hold [`HOLD_S`];
@@ -34,7 +36,7 @@
 
 use crate::camera::{self, Intrinsics, RgbdImage};
 use crate::debug;
-use crate::hand::SimHand;
+use crate::hand::{BALANCE_MARGIN, SimHand};
 pub use crate::record::{Outcome, TrialRecord};
 use crate::scene::{PARKED, Scene, from_mj, on_table, to_mj};
 use crate::service::{PlanAsk, PlanResult, Service, grasp_type_name, pose_from_proto};
@@ -551,6 +553,11 @@ fn execute(
     };
     // Close (crate::closing): guarded unless the options ask for the open loop.
     let (before_p, before_q) = (trial.object_position(), trial.object_orientation());
+    let closed = if trial.scene.balanced_grip {
+        crate::closing::within_force_limits(&trial.scene.model, &grasp, &closed, BALANCE_MARGIN)
+    } else {
+        closed
+    };
     let at_touch = crate::closing::close(trial, &grasp, &closed, opts.guarded_close);
     debug::snapshot(trial, "closed");
     debug::forces(trial, "closed", &grasp, &closed);

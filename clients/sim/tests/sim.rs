@@ -65,15 +65,12 @@ fn the_squeeze_depth_follows_the_servo_stiffness() {
     let Some(data) = testdata() else { return };
     let dir = tempdir();
     let with_scale = |scale: f64| {
-        let toml = dir.join(format!("allegro_{scale}.toml"));
-        std::fs::write(
-            &toml,
-            format!(
-                "model = \"{}\"\nservo_gain_scale = {scale}\n",
-                data.join("hands/wonik_allegro/right_hand.xml").display()
-            ),
-        )
-        .unwrap();
+        let toml = hand_toml(
+            &dir,
+            &format!("allegro_{scale}"),
+            &data.join("hands/wonik_allegro/right_hand.xml"),
+            &format!("servo_gain_scale = {scale}"),
+        );
         SimHand::load(toml.to_str().unwrap(), &data.join("hands"))
             .unwrap()
             .squeeze_depth
@@ -85,6 +82,58 @@ fn the_squeeze_depth_follows_the_servo_stiffness() {
     assert!((0.13..0.16).contains(&lever), "lever {lever} m");
     let gripper = SimHand::load("robotiq_2f85", &data.join("hands")).unwrap();
     assert_eq!(gripper.squeeze_depth, MAX_SQUEEZE_DEPTH);
+}
+
+/// Which hands grip balanced within their force limits (hand.rs): the Barrett's weakest
+/// flexion servo (3 N·m at a finger of about 9 cm from its proximal joint to the farthest geom)
+/// pushes about 33 N at its limit, above BALANCE_MARGIN × GRIP_FORCE = 20 N; the Shadow's
+/// (1 N·m) pushes under 10 N; the 2F-85 has one closing actuator (nothing to balance) and the
+/// Allegro's servos have no force limit (their squeeze depth is sized from their gain). A hand
+/// TOML overrides the derivation.
+#[test]
+fn the_balanced_grip_follows_the_force_limits() {
+    let Some(data) = testdata() else { return };
+    let hands = data.join("hands");
+    let balanced = |name: &str| SimHand::load(name, &hands).unwrap().balanced_grip;
+    assert!(balanced("barrett"));
+    assert!(!balanced("shadow"));
+    assert!(!balanced("robotiq_2f85"));
+    assert!(!balanced("allegro"));
+    let dir = tempdir();
+    let toml = hand_toml(
+        &dir,
+        "shadow_balanced",
+        &hands.join("shadow_hand/right_hand.xml"),
+        "balanced_grip = true",
+    );
+    assert!(balanced(toml.to_str().unwrap()));
+}
+
+/// The balanced squeeze commands on the Barrett (kp 20, force limits ±3 N·m on every finger
+/// servo), by hand: the plan asks the middle finger's proximal servo for 0.35 rad past its
+/// touch and the thumb's for 0.5 rad (the index stays); at margin 2 the thumb, the most loaded,
+/// is asked 2 × 3 = 6 N·m, i.e. 6/20 = 0.3 rad, and the middle 0.35/0.5 of that, 0.21 rad —
+/// proportions kept, where the servos as planned would push 7 and 10 N·m, both cut to 3.
+#[test]
+fn the_balanced_squeeze_keeps_the_plans_proportions() {
+    use graspd_sim::closing::within_force_limits;
+    use mujoco_rs::prelude::*;
+    let Some(data) = testdata() else { return };
+    let mj = MjModel::from_xml(data.join("hands/barrett/wam_barrett_gripper.xml")).unwrap();
+    let id = |n: &str| mj.name_to_id(MjtObjBase::mjOBJ_ACTUATOR, n).unwrap();
+    let nu = mj.ffi().nu as usize;
+    let touch = vec![0.5; nu];
+    let mut squeeze = touch.clone();
+    squeeze[id("middle_med")] += 0.35;
+    squeeze[id("thumb_med")] += 0.5;
+    let out = within_force_limits(&mj, &touch, &squeeze, 2.0);
+    assert!((out[id("thumb_med")] - 0.8).abs() < 1e-9, "{out:?}");
+    assert!((out[id("middle_med")] - 0.71).abs() < 1e-9, "{out:?}");
+    assert_eq!(out[id("index_med")], 0.5);
+    // One travelling actuator has nothing to balance against: the plan as it is.
+    let mut one = touch.clone();
+    one[id("thumb_med")] += 0.5;
+    assert_eq!(within_force_limits(&mj, &touch, &one, 2.0), one);
 }
 
 /// Each shared MJCF hand as derived from its model alone: closing actuators found, and driving
@@ -369,6 +418,13 @@ fn trial_options() -> TrialOptions {
         views: 1,
         gravity_test: false,
     }
+}
+
+/// Writes `DIR/NAME.toml`: a hand TOML for `model` with one more line.
+fn hand_toml(dir: &std::path::Path, name: &str, model: &std::path::Path, line: &str) -> PathBuf {
+    let toml = dir.join(format!("{name}.toml"));
+    std::fs::write(&toml, format!("model = \"{}\"\n{line}\n", model.display())).unwrap();
+    toml
 }
 
 fn tempdir() -> PathBuf {
