@@ -4,12 +4,15 @@
 //! the kinematics (stage 1, then the final-configuration search with the model in the loop:
 //! placement, closing sweep, squeeze, pre-grasp; docs/final-configuration.md). "final joints" is
 //! the time of that search (`timings.finalize`). One thread; medians over objects × seeds.
-//! `cargo bench -p graspd-core --bench kinematic_plan` (`-- --quick`: 2 seeds).
+//! `cargo bench -p graspd-core --bench kinematic_plan` (`-- --quick`: 2 seeds). The digest of
+//! each hand's kinematic plans (poses, joints, contacts, quality, feasibility; a hash of their
+//! exact values) shows whether a change meant to be faster changed any plan.
 
 use graspd_core::hand::kinematics::KinematicHand;
 use graspd_core::planning::{KinematicModel, PlanHints, PlanInput, PlannerOptions, plan};
 use graspd_testkit::view::standard_view;
 use graspd_testkit::ycb::Object;
+use std::hash::{DefaultHasher, Hash, Hasher};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -45,6 +48,7 @@ fn main() {
         let load_ms = t.elapsed().as_secs_f64() * 1e3;
         let (mut base, mut kin, mut fin) = (Vec::new(), Vec::new(), Vec::new());
         let (mut base_ok, mut kin_ok) = (0, 0);
+        let mut digest = DefaultHasher::new();
         for object in Object::TABLE_5_2 {
             for seed in 1..=seeds {
                 let view = standard_view(object, 2000, seed);
@@ -69,15 +73,29 @@ fn main() {
                 kin.push(p.timings.total * 1e3);
                 fin.push(p.timings.finalize * 1e3);
                 kin_ok += usize::from(p.feasible);
+                // Debug prints floats exactly (shortest round trip).
+                format!(
+                    "{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}",
+                    p.hand_pose,
+                    p.joints,
+                    p.pregrasp_joints,
+                    p.squeeze_joints,
+                    p.contacts,
+                    p.quality,
+                    p.feasible,
+                    p.infeasible_reason
+                )
+                .hash(&mut digest);
             }
         }
         let n = base.len();
         let (mb, mk) = (median(&mut base), median(&mut kin));
         let p90 = kin[(0.9 * (n - 1) as f64).round() as usize];
         println!(
-            "{name:13} {n:5}  {mb:8.2} | {mk:8.2} | {:+7.2}            {:8.2}         {p90:8.2}          {base_ok:2}/{n} | {kin_ok:2}/{n}   (model load + description {load_ms:.0} ms)",
+            "{name:13} {n:5}  {mb:8.2} | {mk:8.2} | {:+7.2}            {:8.2}         {p90:8.2}          {base_ok:2}/{n} | {kin_ok:2}/{n}   (model load + description {load_ms:.0} ms)  plans digest {:016x}",
             mk - mb,
             median(&mut fin),
+            digest.finish(),
         );
     }
 }
