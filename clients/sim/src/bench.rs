@@ -270,6 +270,12 @@ fn markdown(report: &BenchReport, hands: &[SimHand]) -> String {
         );
     }
     let _ = writeln!(s);
+    let _ = write!(s, "| 95 % interval (Wilson) |");
+    for h in &report.hands {
+        let (lo, hi) = crate::compare::wilson(h.successes, h.trials, crate::compare::Z_95);
+        let _ = write!(s, " {:.1}–{:.1} % |", lo * 100.0, hi * 100.0);
+    }
+    let _ = writeln!(s);
     if report.records.iter().any(|r| r.gravity_held.is_some()) {
         let _ = write!(s, "| held against gravity along ±x, ±y, ±z |");
         for h in &report.hands {

@@ -5,6 +5,7 @@
 pub mod bench;
 pub mod camera;
 pub mod closing;
+pub mod compare;
 mod debug;
 pub mod gravity;
 pub mod hand;

@@ -130,6 +130,15 @@ enum Command {
         #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
         snapshots: bool,
     },
+    /// Two bench runs on the same seeds, trial by trial: per hand the counts with their 95 %
+    /// intervals, the trials that flipped and McNemar's exact p-value, then the objects that
+    /// changed (markdown). Needs no graspd.
+    Compare {
+        /// The base run's results.json.
+        base: PathBuf,
+        /// The new run's results.json.
+        new: PathBuf,
+    },
 }
 
 /// Which objects, how many trials each, from which seed.
@@ -193,6 +202,14 @@ fn main() {
 
 fn real_main() -> Result<(), SimError> {
     let cli = Cli::parse();
+    if let Command::Compare { base, new } = &cli.command {
+        let (b, n) = (
+            graspd_sim::compare::read_trials(base)?,
+            graspd_sim::compare::read_trials(new)?,
+        );
+        print!("{}", graspd_sim::compare::compare(&b, &n).markdown());
+        return Ok(());
+    }
     let intrinsics = parse_image(&cli.image)?;
     let rt = tokio::runtime::Runtime::new()
         .map_err(|e| SimError::Service(format!("tokio runtime: {e}")))?;
@@ -281,6 +298,7 @@ fn real_main() -> Result<(), SimError> {
             let report = run_bench(&config, &service)?;
             println!("{}", report.markdown);
         }
+        Command::Compare { .. } => unreachable!("answered before graspd is connected"),
     }
     Ok(())
 }

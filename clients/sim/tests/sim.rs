@@ -432,3 +432,55 @@ fn tempdir() -> PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+/// `graspd-sim compare` (the real binary, no graspd): two runs' records paired by hand, object
+/// and seed — 8 of the Allegro's 10 trials flip from failed to held, none the other way, so
+/// McNemar's exact p = 2·2⁻⁸ = 0.008 and 2/10 → 10/10 carry their Wilson intervals (6–51 %,
+/// 72–100 %); a file that is not a results.json is refused by name.
+#[test]
+fn compare_pairs_two_runs_and_refuses_a_foreign_file() {
+    let dir = tempdir().join("compare");
+    std::fs::create_dir_all(&dir).unwrap();
+    let run = |held: usize| {
+        let records: Vec<String> = (0..10)
+            .map(|seed| {
+                let outcome = if seed < held { "success" } else { "slipped_lift" };
+                format!(
+                    r#"{{"hand": "allegro", "object": "banana", "seed": {seed}, "outcome": "{outcome}", "detail": ""}}"#
+                )
+            })
+            .collect();
+        format!(r#"{{"records": [{}]}}"#, records.join(","))
+    };
+    let (base, new, bad) = (dir.join("a.json"), dir.join("b.json"), dir.join("c.json"));
+    std::fs::write(&base, run(2)).unwrap();
+    std::fs::write(&new, run(10)).unwrap();
+    std::fs::write(&bad, r#"{"hands": []}"#).unwrap();
+    let exe = env!("CARGO_BIN_EXE_graspd-sim");
+    let out = std::process::Command::new(exe)
+        .args(["compare".as_ref(), base.as_os_str(), new.as_os_str()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains(
+            "| allegro | 2/10 = 20.0 % (6–51 %) | 10/10 = 100.0 % (72–100 %) | 0 | 8 | 0.008 |"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("| allegro | banana | 2 → 10 of 10 | 0 | 8 |"),
+        "{text}"
+    );
+    let out = std::process::Command::new(exe)
+        .args(["compare".as_ref(), base.as_os_str(), bad.as_os_str()])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("c.json: not a graspd-sim results.json"),
+        "{err}"
+    );
+}
