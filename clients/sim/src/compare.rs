@@ -117,20 +117,22 @@ pub fn compare(base: &[Trial], new: &[Trial]) -> Comparison {
     let key = |t: &Trial| (t.hand.clone(), t.object.clone(), t.seed);
     let held = |t: &Trial| t.outcome == "success";
     let new_by_key: BTreeMap<_, bool> = new.iter().map(|t| (key(t), held(t))).collect();
-    let mut c = Comparison::default();
-    let mut paired = 0;
+    let base_keys: std::collections::BTreeSet<_> = base.iter().map(key).collect();
+    let mut c = Comparison {
+        unpaired: new.iter().filter(|t| !base_keys.contains(&key(t))).count(),
+        ..Default::default()
+    };
     for t in base {
         let Some(&n) = new_by_key.get(&key(t)) else {
+            c.unpaired += 1;
             continue;
         };
-        paired += 1;
         c.hands.entry(t.hand.clone()).or_default().add(held(t), n);
         c.cells
             .entry((t.hand.clone(), t.object.clone()))
             .or_default()
             .add(held(t), n);
     }
-    c.unpaired = base.len() + new.len() - 2 * paired;
     c
 }
 
@@ -270,6 +272,10 @@ mod tests {
         assert_eq!(c.cells[&("a".into(), "y".into())].lost, 1);
         assert_eq!(c.hands["b"].trials, 1);
         assert_eq!(c.unpaired, 1);
+        // A trial listed twice in one run pairs twice and never makes the count negative.
+        let twice = [base[0].clone(), base[0].clone()];
+        assert_eq!(compare(&twice, &new[1..2]).hands["a"].trials, 2);
+        assert_eq!(compare(&twice, &new[1..2]).unpaired, 0);
         let md = c.markdown();
         assert!(md.contains("| a | 2/3 = 66.7 %"), "{md}");
         assert!(md.contains("| a | y | 1 → 0 of 1 | 1 | 0 |"), "{md}");
