@@ -6,7 +6,8 @@
 //! the time of that search (`timings.finalize`). One thread; medians over objects × seeds.
 //! `cargo bench -p graspd-core --bench kinematic_plan` (`-- --quick`: 2 seeds). The digest of
 //! each hand's kinematic plans (poses, joints, contacts, quality, feasibility; a hash of their
-//! exact values) shows whether a change meant to be faster changed any plan.
+//! exact values; comparable between builds of one toolchain) shows whether a change meant to be
+//! faster changed any plan.
 
 use graspd_core::hand::kinematics::KinematicHand;
 use graspd_core::planning::{KinematicModel, PlanHints, PlanInput, PlannerOptions, plan};
