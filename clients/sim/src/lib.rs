@@ -6,6 +6,7 @@ pub mod bench;
 pub mod camera;
 pub mod closing;
 pub mod compare;
+pub mod completion;
 mod debug;
 pub mod gravity;
 pub mod hand;

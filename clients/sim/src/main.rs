@@ -139,6 +139,12 @@ enum Command {
         /// The new run's results.json.
         new: PathBuf,
     },
+    /// How well graspd's completion of a single view guesses the unseen side, against the
+    /// object seen from all around the table (markdown, per object). Needs no graspd.
+    Completion {
+        #[command(flatten)]
+        runs: Runs,
+    },
 }
 
 /// Which objects, how many trials each, from which seed.
@@ -211,11 +217,6 @@ fn real_main() -> Result<(), SimError> {
         return Ok(());
     }
     let intrinsics = parse_image(&cli.image)?;
-    let rt = tokio::runtime::Runtime::new()
-        .map_err(|e| SimError::Service(format!("tokio runtime: {e}")))?;
-    let service = Service::connect(&cli.graspd, rt.handle().clone())?;
-    let hands_dir = cli.testdata.join("hands");
-    let objects_dir = cli.testdata.join("objects");
     let opts = TrialOptions {
         intrinsics,
         camera: default_view(),
@@ -229,6 +230,22 @@ fn real_main() -> Result<(), SimError> {
         views: cli.views,
         gravity_test: !cli.skip_gravity_test,
     };
+    if let Command::Completion { runs } = &cli.command {
+        let scores = graspd_sim::completion::run_completion(
+            &runs.objects(),
+            runs.trials,
+            runs.seed,
+            &cli.testdata,
+            &opts,
+        )?;
+        print!("{}", graspd_sim::completion::markdown(&scores));
+        return Ok(());
+    }
+    let rt = tokio::runtime::Runtime::new()
+        .map_err(|e| SimError::Service(format!("tokio runtime: {e}")))?;
+    let service = Service::connect(&cli.graspd, rt.handle().clone())?;
+    let hands_dir = cli.testdata.join("hands");
+    let objects_dir = cli.testdata.join("objects");
     match cli.command {
         Command::Trial { hand, object, seed } => {
             let hand = SimHand::load(&hand, &hands_dir)?;
@@ -298,7 +315,9 @@ fn real_main() -> Result<(), SimError> {
             let report = run_bench(&config, &service)?;
             println!("{}", report.markdown);
         }
-        Command::Compare { .. } => unreachable!("answered before graspd is connected"),
+        Command::Compare { .. } | Command::Completion { .. } => {
+            unreachable!("answered before graspd is connected")
+        }
     }
     Ok(())
 }

@@ -433,6 +433,32 @@ fn tempdir() -> PathBuf {
     d
 }
 
+/// The planner's completion of one view, measured against the object seen from all around
+/// (`graspd-sim completion`): the standing soup can's half turn and the lying banana's mirror
+/// across its centreline each cover most of the unseen side, close to the true surface. (The
+/// banana's half turn, the only hypothesis before, covered 1 %.)
+#[test]
+fn the_completion_covers_the_unseen_side_of_a_can_and_a_banana() {
+    let Some(data) = testdata() else { return };
+    let opts = TrialOptions {
+        place_range: 0.1,
+        ..trial_options()
+    };
+    let names = ["tomato_soup_can".to_string(), "banana".to_string()];
+    let scores = graspd_sim::completion::run_completion(&names, 2, 0, &data, &opts).unwrap();
+    assert_eq!(scores.len(), 4);
+    for s in &scores {
+        assert!(s.added > 500 && s.hidden > 500, "{s:?}");
+        assert!(s.covered as f64 >= 0.6 * s.hidden as f64, "{s:?}");
+        assert!(s.mean_mm < 3.0 && s.p90_mm < 6.0, "{s:?}");
+    }
+    let md = graspd_sim::completion::markdown(&scores);
+    assert!(
+        md.contains("| banana | 2 |") && md.contains("| **all** | 4 |"),
+        "{md}"
+    );
+}
+
 /// `graspd-sim compare` (the real binary, no graspd): two runs' records paired by hand, object
 /// and seed — 8 of the Allegro's 10 trials flip from failed to held, none the other way, so
 /// McNemar's exact p = 2·2⁻⁸ = 0.008 and 2/10 → 10/10 carry their Wilson intervals (6–51 %,

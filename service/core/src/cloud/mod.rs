@@ -1,5 +1,6 @@
 //! Point clouds: the cloud type, k-NN normals, the support plane, and file formats.
 
+pub mod centreline;
 pub mod completion;
 pub mod io;
 pub mod normals;
@@ -7,7 +8,7 @@ pub mod pca;
 pub mod plane;
 pub mod point_cloud;
 
-pub use completion::{Completion, symmetric_completion};
+pub use completion::{Completion, Symmetry, symmetric_completion};
 pub use normals::{
     CloudIndex, LazyNormals, Orientation, estimate_normals, knn_lists, normals_from_neighbours,
 };

@@ -203,7 +203,12 @@ fn complete_unseen(
         return plain;
     };
     if let Some(n) = &mut scene.normals {
-        let mirrored: Vec<Vector3<f64>> = c.source.iter().map(|&i| c.turn_vector(&n[i])).collect();
+        let mirrored: Vec<Vector3<f64>> = c
+            .source
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| c.map_vector(k, &n[i]))
+            .collect();
         n.extend(mirrored);
     }
     let more: Vec<usize> = c.source.iter().map(|&i| scene.original[i]).collect();
