@@ -312,6 +312,7 @@ fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
             up: None,
             detected_attention: None,
             detected_types: None,
+            seen_from: Vec::new(),
         },
         image_hints: ImageHints {
             attention_pixel: args.pixel.map(|[u, v]| (pixel(u), pixel(v))),

@@ -183,7 +183,7 @@ impl Perceived {
             self.decoded.height,
             output.probability_maps_max_side as usize,
         );
-        if let Some(f) = self.fusion {
+        if let Some(f) = &self.fusion {
             report.fused_views = f.views;
             report.fused_points = f.added_points;
             report.object_points += f.added_points;
@@ -646,10 +646,13 @@ impl GraspService {
                         &SegmentationParams::default(),
                         "extra_views",
                     )?;
+                    // The far side is measured: no completion, and each point's normal
+                    // faces the camera that saw it; the first camera still sets the approach
+                    // side, as for one view.
+                    hints.seen_from = std::iter::once((object.len(), info.viewpoint))
+                        .chain(report.seen_from.iter().copied())
+                        .collect();
                     object = fused;
-                    // The far side is measured: no completion, and normals point away
-                    // from the object's centre (a single viewpoint no longer sees them all).
-                    hints.viewpoint = None;
                     perceived.fusion = Some(report);
                 }
                 (object, Some(perceived))

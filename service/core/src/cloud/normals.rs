@@ -159,6 +159,19 @@ pub enum Orientation {
 }
 
 impl Orientation {
+    /// A fused cloud's points each facing the camera that saw it, after a subset was kept:
+    /// `seen_from` holds (end index, camera position) over the whole cloud in ascending `end`,
+    /// `kept` the indices of the points kept from it, ascending.
+    pub fn seen_from(seen_from: &[(usize, Point3<f64>)], kept: &[usize]) -> Self {
+        Orientation::Views(
+            seen_from
+                .iter()
+                .map(|&(end, eye)| (kept.partition_point(|&i| i < end), eye))
+                .collect::<Vec<_>>()
+                .into(),
+        )
+    }
+
     /// The outward direction of point `i` at `p` (`centroid`: the cloud's).
     pub fn outward(&self, i: usize, p: &Point3<f64>, centroid: &Point3<f64>) -> Vector3<f64> {
         match self {
@@ -189,6 +202,17 @@ pub fn orient_normals(points: &[Point3<f64>], normals: &mut [Vector3<f64>], orie
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Points 0–3 came from camera A, 4–9 from B; points 1, 4, 7 and 8 were dropped: the kept
+    /// ones (0, 2, 3 | 5, 6, 9) face A, A, A, B, B, B.
+    #[test]
+    fn a_fused_cloud_faces_each_camera_through_the_kept_subset() {
+        let (a, b) = (Point3::new(-1.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0));
+        let o = Orientation::seen_from(&[(4, a), (10, b)], &[0, 2, 3, 5, 6, 9]);
+        let origin = Point3::origin();
+        let faces: Vec<f64> = (0..6).map(|i| o.outward(i, &origin, &origin).x).collect();
+        assert_eq!(faces, vec![-1.0, -1.0, -1.0, 1.0, 1.0, 1.0]);
+    }
 
     /// Points on a sphere of radius r by a Fibonacci lattice.
     pub fn sphere(n: usize, r: f64) -> Vec<Point3<f64>> {

@@ -26,12 +26,15 @@ pub const MAX_GROWTH: f64 = 0.12;
 pub const DUPLICATE: f64 = 0.002;
 
 /// What the fusion did, for the response.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct FusionReport {
     /// Further views fused.
     pub views: usize,
     /// Points they added to the object.
     pub added_points: usize,
+    /// Where the added points were seen from: (end index in the fused cloud, camera position)
+    /// per view that added any, in order (`PlanHints::seen_from`, after the first view's).
+    pub seen_from: Vec<(usize, Point3<f64>)>,
 }
 
 /// Adds to `object` (world frame, from the first view) what `views` see of it. Every view needs
@@ -56,13 +59,14 @@ pub fn fuse_views(
     let (lo, hi) = (lo - grow, hi + grow);
     let inside = |p: &Point3<f64>| (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]);
     let mut added = 0;
+    let mut seen_from = Vec::new();
     for (i, view) in views.iter().enumerate() {
-        if view.camera_to_world.is_none() {
+        let Some(camera) = view.camera_to_world else {
             return Err(FieldError::new(
                 format!("{field}[{i}].camera_to_world"),
                 "is required: a further view is fused in the world frame",
             ));
-        }
+        };
         let seen = depth_to_cloud(view, CloudFrame::World).cloud.points;
         let candidates: Vec<Point3<f64>> = seen
             .into_iter()
@@ -94,12 +98,16 @@ pub fn fuse_views(
             .collect();
         added += fresh.len();
         points.extend(fresh);
+        if points.len() > n {
+            seen_from.push((points.len(), Point3::from(camera.translation.vector)));
+        }
     }
     Ok((
         PointCloud::new(points),
         FusionReport {
             views: views.len(),
             added_points: added,
+            seen_from,
         },
     ))
 }
@@ -193,6 +201,11 @@ mod tests {
         assert_eq!(report.views, 1);
         assert!(report.added_points > 50, "{report:?}");
         assert_eq!(fused.points.len(), seen.len() + report.added_points);
+        // The added points were seen from the second camera: their normals will face it.
+        assert_eq!(report.seen_from.len(), 1);
+        let (end, eye) = report.seen_from[0];
+        assert_eq!(end, fused.points.len());
+        assert!((eye - Point3::new(0.5, 0.0, 0.3)).norm() < 1e-9, "{eye}");
         let far = fused.points.iter().filter(|p| p.x > 0.02).count();
         assert!(far > 50, "the far side joined: {far}");
         for p in &fused.points {

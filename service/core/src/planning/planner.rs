@@ -186,12 +186,17 @@ fn separate_support_plane(
 }
 
 /// Adds the unseen side (`cloud::completion`) to the scene; returns the normals' orientation.
+/// A fused cloud (`seen_from`) is not completed: each point's normal faces its own camera.
 fn complete_unseen(
     scene: &mut Scene,
     viewpoint: Option<Point3<f64>>,
+    seen_from: &[(usize, Point3<f64>)],
     up: Option<Vector3<f64>>,
     enabled: bool,
 ) -> Orientation {
+    if !seen_from.is_empty() {
+        return Orientation::seen_from(seen_from, &scene.original);
+    }
     let plain = match viewpoint {
         Some(v) => Orientation::TowardViewpoint(v),
         None => Orientation::AwayFromCentroid,
@@ -255,7 +260,13 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         .map(|p| p.normal)
         .or(hints.up.and_then(|u| u.try_normalize(1e-9)));
     let mut scene = scene;
-    let orient = complete_unseen(&mut scene, hints.viewpoint, up, options.complete_unseen);
+    let orient = complete_unseen(
+        &mut scene,
+        hints.viewpoint,
+        &hints.seen_from,
+        up,
+        options.complete_unseen,
+    );
     let points = &scene.points;
     let t_pre = t_start.elapsed().as_secs_f64();
 

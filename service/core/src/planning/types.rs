@@ -136,6 +136,11 @@ pub struct PlanHints {
     pub support_plane: Option<Plane>,
     /// Sensor position in the cloud's frame: normals face it and it sets the approach side.
     pub viewpoint: Option<Point3<f64>>,
+    /// For a cloud fused from several views: where each part of it was seen from, as (end
+    /// index, camera position) in order. Each point's normal then faces the camera that saw it
+    /// and nothing is completed (the far side was measured); `viewpoint` still sets the
+    /// approach side.
+    pub seen_from: Vec<(usize, Point3<f64>)>,
     /// Which way is up, when no support plane is known.
     pub up: Option<Vector3<f64>>,
     /// P(s|O) for s = 1..6 from the grasp-type model over the ROI (Eq 4.3): the planner takes

@@ -491,6 +491,7 @@ fn hints_from_proto(h: Option<pb::PlanHints>) -> Result<(PlanHints, ImageHints),
         up: h.up.as_ref().map(vec3_from_proto),
         detected_attention: None,
         detected_types: None,
+        seen_from: Vec::new(),
     };
     let image = ImageHints {
         attention_pixel: h.attention_pixel.map(|p| (p.u, p.v)),

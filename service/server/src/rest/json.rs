@@ -564,6 +564,7 @@ pub fn plan_request_from_json(
         up: h.up.map(|p| p.vector()),
         detected_attention: None,
         detected_types: None,
+        seen_from: Vec::new(),
     };
     let image_hints = ImageHints {
         attention_pixel: h.attention_pixel.map(|p| (p.u, p.v)),
