@@ -60,11 +60,12 @@ pub fn score_completion(
     let obj = scene.object_bodies[0];
     let is_object = |g: usize| scene.model.geom_bodyid()[g] as usize == obj;
     let views = views_around(camera, TRUTH_VIEWS);
+    // The benchmark camera's view is the first of the truth's.
     let seen = trial.render(intrinsics, views[0]).points_of(is_object);
-    let truth: Vec<Point3<f64>> = views
-        .iter()
-        .flat_map(|v| trial.render(intrinsics, *v).points_of(is_object))
-        .collect();
+    let mut truth = seen.clone();
+    for v in &views[1..] {
+        truth.extend(trial.render(intrinsics, *v).points_of(is_object));
+    }
     let eye = Point3::from(camera.translation.vector);
     let table = Plane {
         normal: Vector3::z(),

@@ -44,13 +44,7 @@ impl Centreline {
         if points.len() < 20 {
             return None;
         }
-        let helper = if up.x.abs() < 0.9 {
-            Vector3::x()
-        } else {
-            Vector3::y()
-        };
-        let a = up.cross(&helper).normalize();
-        let b = up.cross(&a);
+        let (a, b) = super::tangents(up);
         // The horizontal spread's principal directions (2 × 2 covariance, closed form).
         let flat: Vec<Vector2<f64>> = points
             .iter()

@@ -355,13 +355,7 @@ const FREE_SPACE_TOLERANCE: f64 = 0.005;
 impl SeenDepth {
     fn new(points: &[Point3<f64>], eye: &Point3<f64>, view: &Vector3<f64>) -> Self {
         let z = view.normalize();
-        let helper = if z.x.abs() < 0.9 {
-            Vector3::x()
-        } else {
-            Vector3::y()
-        };
-        let x = z.cross(&helper).normalize();
-        let y = z.cross(&x);
+        let (x, y) = super::tangents(&z);
         let axes = [x, y, z];
         let project = |p: &Point3<f64>| {
             let d = p - eye;

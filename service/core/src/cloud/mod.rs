@@ -12,7 +12,7 @@ pub use completion::{Completion, Symmetry, symmetric_completion};
 pub use normals::{
     CloudIndex, LazyNormals, Orientation, estimate_normals, knn_lists, normals_from_neighbours,
 };
-pub use plane::{Plane, RansacParams, detect_support_plane};
+pub use plane::{Plane, RansacParams, detect_support_plane, tangents};
 pub use point_cloud::{
     MIN_POINTS, PointCloud, decode_packed_vec3, decode_packed_xyz, encode_packed_xyz,
 };

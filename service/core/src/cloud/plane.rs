@@ -185,6 +185,20 @@ pub fn detect_support_plane(
     Some(SupportPlaneFit { plane, removed })
 }
 
+/// Two unit tangents completing the unit vector `n` to an orthonormal frame (t1, t2, n): a
+/// plane's in-plane directions, the friction cone's edges about a contact normal, a view's
+/// image axes.
+pub fn tangents(n: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let a = if n.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let t1 = n.cross(&a).normalize();
+    let t2 = n.cross(&t1);
+    (t1, t2)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -10,17 +10,7 @@ pub struct ContactPoint {
     pub normal: Vector3<f64>,
 }
 
-/// Two unit tangents completing `n` to an orthonormal frame.
-pub fn tangents(n: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
-    let a = if n.x.abs() < 0.9 {
-        Vector3::x()
-    } else {
-        Vector3::y()
-    };
-    let t1 = n.cross(&a).normalize();
-    let t2 = n.cross(&t1);
-    (t1, t2)
-}
+pub use crate::cloud::tangents;
 
 /// G·Gᵀ of the soft-finger grasp matrix (method.md §3): per contact three force directions (normal
 /// and two tangents) and a torsional moment γ·n about the normal. Moments are taken about the grasp
