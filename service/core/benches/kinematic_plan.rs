@@ -4,7 +4,8 @@
 //! the kinematics (stage 1, then the final-configuration search with the model in the loop:
 //! placement, closing sweep, squeeze, pre-grasp; docs/final-configuration.md). "final joints" is
 //! the time of that search (`timings.finalize`). One thread; medians over objects × seeds.
-//! `cargo bench -p graspd-core --bench kinematic_plan` (`-- --quick`: 2 seeds). The digest of
+//! `cargo bench -p graspd-core --bench kinematic_plan` (`-- --quick`: 2 seeds; `-- --hand NAME`:
+//! that hand only). The digest of
 //! each hand's kinematic plans (poses, joints, contacts, quality, feasibility; a hash of their
 //! exact values; comparable between builds of one toolchain) shows whether a change meant to be
 //! faster changed any plan.
@@ -37,11 +38,21 @@ fn median(v: &mut [f64]) -> f64 {
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
     let seeds: u64 = if quick { 2 } else { 5 };
+    // `--hand NAME` (repeatable): only those hands (their digests are the same as in a full run).
+    let args: Vec<String> = std::env::args().collect();
+    let only: Vec<&str> = args
+        .windows(2)
+        .filter(|w| w[0] == "--hand")
+        .map(|w| w[1].as_str())
+        .collect();
     let dir = graspd_testkit::testdata_dir().join("hands");
     println!(
         "hand          plans  median ms (parametric | kinematic | added)  final joints ms  p90 kinematic ms  feasible (parametric | kinematic)"
     );
     for (name, file) in HANDS {
+        if !only.is_empty() && !only.contains(&name) {
+            continue;
+        }
         let t = Instant::now();
         let hand = KinematicHand::from_mjcf_file(dir.join(file)).unwrap();
         let model = Arc::new(KinematicModel::new(hand).unwrap());
