@@ -5,7 +5,7 @@
 //! placement, closing sweep, squeeze, pre-grasp; docs/final-configuration.md). "final joints" is
 //! the time of that search (`timings.finalize`). One thread; medians over objects × seeds.
 //! `cargo bench -p graspd-core --bench kinematic_plan` (`-- --quick`: 2 seeds; `-- --hand NAME`:
-//! that hand only). The digest of
+//! that hand only; `-- --why`: why each infeasible plan is). The digest of
 //! each hand's kinematic plans (poses, joints, contacts, quality, feasibility; a hash of their
 //! exact values; comparable between builds of one toolchain) shows whether a change meant to be
 //! faster changed any plan.
@@ -40,6 +40,8 @@ fn main() {
     let seeds: u64 = if quick { 2 } else { 5 };
     // `--hand NAME` (repeatable): only those hands (their digests are the same as in a full run).
     let args: Vec<String> = std::env::args().collect();
+    // `--why`: each infeasible kinematic plan's object, seed and reason.
+    let why = args.iter().any(|a| a == "--why");
     let only: Vec<&str> = args
         .windows(2)
         .filter(|w| w[0] == "--hand")
@@ -85,6 +87,15 @@ fn main() {
                 kin.push(p.timings.total * 1e3);
                 fin.push(p.timings.finalize * 1e3);
                 kin_ok += usize::from(p.feasible);
+                if why && !p.feasible {
+                    println!(
+                        "  {name} {object:?} seed {seed}: {} ({:?}, {} contacts, robustness {:.2})",
+                        p.infeasible_reason.as_deref().unwrap_or("?"),
+                        p.grasp_type,
+                        p.contacts.len(),
+                        p.quality.robustness
+                    );
+                }
                 // Debug prints floats exactly (shortest round trip).
                 format!(
                     "{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}",
