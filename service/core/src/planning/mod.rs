@@ -10,6 +10,7 @@ pub mod hand_pose;
 pub mod kinematic_model;
 pub mod object_shape;
 pub mod opposition;
+mod plan_assembly;
 mod planner;
 pub mod quality;
 pub mod robustness;
