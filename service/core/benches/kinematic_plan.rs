@@ -36,17 +36,24 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 fn main() {
-    let quick = std::env::args().any(|a| a == "--quick");
-    let seeds: u64 = if quick { 2 } else { 5 };
-    // `--hand NAME` (repeatable): only those hands (their digests are the same as in a full run).
     let args: Vec<String> = std::env::args().collect();
+    let seeds: u64 = if args.iter().any(|a| a == "--quick") {
+        2
+    } else {
+        5
+    };
     // `--why`: each infeasible kinematic plan's object, seed and reason.
     let why = args.iter().any(|a| a == "--why");
+    // `--hand NAME` (repeatable): only those hands (their digests are the same as in a full run).
     let only: Vec<&str> = args
         .windows(2)
         .filter(|w| w[0] == "--hand")
         .map(|w| w[1].as_str())
         .collect();
+    if let Some(unknown) = only.iter().find(|h| !HANDS.iter().any(|(n, _)| n == *h)) {
+        let known: Vec<&str> = HANDS.iter().map(|(n, _)| *n).collect();
+        panic!("--hand {unknown}: not one of {known:?}");
+    }
     let dir = graspd_testkit::testdata_dir().join("hands");
     println!(
         "hand          plans  median ms (parametric | kinematic | added)  final joints ms  p90 kinematic ms  feasible (parametric | kinematic)"
