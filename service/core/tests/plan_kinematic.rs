@@ -333,3 +333,55 @@ fn kinematic_plans_are_deterministic() {
     assert_eq!(a.contacts, b.contacts);
     assert_eq!(a.hand_pose, b.hand_pose);
 }
+
+/// A fingertip grasp of an object wider than the best pre-shape opens: the Shadow's thumb
+/// against its four fingers opens 64 mm at most in its best pre-shape, and the pudding box
+/// lying flat is 89 mm across. With the best pre-shape alone none of six views gave a feasible
+/// precision grasp (the fingertips land on the box's top); with the wider pre-shapes half do,
+/// each touching with the thumb and the fingers.
+#[test]
+fn fingertip_grasps_of_wide_boxes_open_wider_pre_shapes() {
+    let m = model(SHARED_HANDS[0]);
+    let thumb = m
+        .hand
+        .fingers
+        .iter()
+        .position(|f| f.name == "thdistal")
+        .unwrap();
+    let fingers: Vec<usize> = (0..m.hand.fingers.len()).filter(|&f| f != thumb).collect();
+    let pres = m.pre_shapes(&[thumb], &fingers).unwrap();
+    assert!(pres[0].widest() < 0.07, "{}", pres[0].widest());
+    for w in pres.windows(2) {
+        assert!(w[1].widest() >= w[0].widest() + 0.02 - 1e-12);
+    }
+    assert!(pres.last().unwrap().widest() > 0.12);
+    let mut feasible = 0;
+    for seed in 1..=6 {
+        let v = standard_view(Object::PuddingBox, 2000, seed);
+        let p = plan(PlanInput {
+            cloud: v.object_cloud(),
+            hand: m.describe().unwrap(),
+            hints: PlanHints {
+                support_plane: Some(v.support_plane),
+                viewpoint: Some(v.viewpoint),
+                grasp_type: Some(graspd_core::GraspType::Precision),
+                ..Default::default()
+            },
+            options: PlannerOptions {
+                seed,
+                ..Default::default()
+            },
+            kinematics: Some(m.clone()),
+        })
+        .unwrap();
+        if p.feasible {
+            feasible += 1;
+            let touching: Vec<&str> = p.contacts.iter().map(|c| c.finger.as_str()).collect();
+            assert!(
+                touching.contains(&"thdistal") && touching.iter().any(|f| *f != "thdistal"),
+                "seed {seed}: {touching:?}"
+            );
+        }
+    }
+    assert!(feasible >= 3, "{feasible} of 6 feasible");
+}

@@ -19,12 +19,13 @@ pub struct KinematicModel {
     pub pre_shapes: Vec<PreShapeEntry>,
 }
 
-/// The pre-shape of one grasp realisation: fingers h1 (empty: the palm) against h2.
+/// The pre-shapes of one grasp realisation: fingers h1 (empty: the palm) against h2, the best
+/// first, then wider ones ([`crate::hand::kinematics::HandSynergy::pre_shapes`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PreShapeEntry {
     pub h1: Vec<usize>,
     pub h2: Vec<usize>,
-    pub shape: PreShape,
+    pub shapes: Vec<PreShape>,
 }
 
 impl KinematicModel {
@@ -44,9 +45,10 @@ impl KinematicModel {
             if h2.is_empty() || pre_shapes.iter().any(|p| p.h1 == h1 && p.h2 == h2) {
                 continue;
             }
-            if let Ok(shape) = synergy.pre_shape(&hand, &h1, &h2, description.geometry.finger_width)
+            if let Ok(shapes) =
+                synergy.pre_shapes(&hand, &h1, &h2, description.geometry.finger_width)
             {
-                pre_shapes.push(PreShapeEntry { h1, h2, shape });
+                pre_shapes.push(PreShapeEntry { h1, h2, shapes });
             }
         }
         Ok(Self {
@@ -57,12 +59,13 @@ impl KinematicModel {
         })
     }
 
-    /// The pre-shape for fingers `h1` (empty: the palm) against `h2` (kinematic indices).
-    pub fn pre_shape(&self, h1: &[usize], h2: &[usize]) -> Option<&PreShape> {
+    /// The pre-shapes for fingers `h1` (empty: the palm) against `h2` (kinematic indices), the
+    /// best first, then wider ones.
+    pub fn pre_shapes(&self, h1: &[usize], h2: &[usize]) -> Option<&[PreShape]> {
         self.pre_shapes
             .iter()
             .find(|p| p.h1 == h1 && p.h2 == h2)
-            .map(|p| &p.shape)
+            .map(|p| p.shapes.as_slice())
     }
 
     /// The validated hand description derived from the kinematics.

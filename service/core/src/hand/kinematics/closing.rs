@@ -38,6 +38,10 @@ pub const MIN_CLOSING_COS: f64 = 0.2;
 pub const PATH_SAMPLES: usize = 11;
 /// Workspace samples whose setting joints are tried as pre-shapes.
 const PRESHAPE_CANDIDATES: usize = 192;
+/// Beside the best pre-shape, up to this many wider ones are kept ([`HandSynergy::pre_shapes`]).
+pub const WIDER_PRESHAPES: usize = 3;
+/// Each wider pre-shape opens at least this much further than the one before it, m.
+pub const WIDER_STEP: f64 = 0.02;
 
 /// A joint that closes a finger.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -80,6 +84,11 @@ pub struct PreShape {
 }
 
 impl PreShape {
+    /// The widest opening along the closing path, m.
+    pub fn widest(&self) -> f64 {
+        self.opening.iter().copied().fold(0.0, f64::max)
+    }
+
     /// The least s at which the opening is at most `width` (1 when it never is).
     pub fn s_for_opening(&self, width: f64) -> f64 {
         let o = &self.opening;
@@ -208,14 +217,18 @@ impl HandSynergy {
         Ok(())
     }
 
-    /// The pre-shape for grasping with `h1` (empty: the palm) against `h2` (module rules).
-    pub fn pre_shape(
+    /// The pre-shapes for grasping with `h1` (empty: the palm) against `h2` (module rules):
+    /// the best first, then up to [`WIDER_PRESHAPES`] that open further, each the best of those
+    /// opening at least [`WIDER_STEP`] wider than the one before. The best stays near the open
+    /// pose and may open narrower than the object: the Shadow's thumb against its four fingers
+    /// opens 64 mm at most there, against a 89 mm box whose fingertips then land on its top.
+    pub fn pre_shapes(
         &self,
         hand: &KinematicHand,
         h1: &[usize],
         h2: &[usize],
         finger_width: f64,
-    ) -> Result<PreShape, FieldError> {
+    ) -> Result<Vec<PreShape>, FieldError> {
         let mut home = hand.tree.home_configuration();
         hand.tree.project_constraints(&mut home)?;
         let taking_part: Vec<usize> = h1.iter().chain(h2).copied().collect();
@@ -225,7 +238,7 @@ impl HandSynergy {
         if !linked {
             starts.extend(hand.sample_configurations(PRESHAPE_CANDIDATES, WORKSPACE_SEED ^ 0x9e5));
         }
-        let mut best: Option<(f64, PreShape)> = None;
+        let mut scored: Vec<(f64, PreShape)> = Vec::new();
         for start in &starts {
             let mut base = home.clone();
             let mut moved = 0.0;
@@ -242,17 +255,30 @@ impl HandSynergy {
             };
             // Stay near the open pose unless another posture opposes clearly better (1 cm per
             // full range moved).
-            let score = score + 0.01 * moved;
-            if best.as_ref().is_none_or(|(b, _)| score < *b) {
-                best = Some((score, shape));
-            }
+            scored.push((score + 0.01 * moved, shape));
         }
-        best.map(|(_, s)| s).ok_or_else(|| {
-            FieldError::new(
+        let best_of = |least: f64| {
+            scored
+                .iter()
+                .filter(|(_, s)| s.widest() >= least)
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .map(|(_, s)| s.clone())
+        };
+        let mut out: Vec<PreShape> = best_of(f64::NEG_INFINITY).into_iter().collect();
+        if out.is_empty() {
+            return Err(FieldError::new(
                 "hand.fingers",
                 "no pre-shape brings the opposing fingers' contact points together",
-            )
-        })
+            ));
+        }
+        while out.len() <= WIDER_PRESHAPES {
+            let least = out.last().map_or(0.0, PreShape::widest) + WIDER_STEP;
+            let Some(wider) = best_of(least) else {
+                break;
+            };
+            out.push(wider);
+        }
+        Ok(out)
     }
 
     /// Scores a pre-shape (lower is better) and builds it; None when the fingers never oppose.

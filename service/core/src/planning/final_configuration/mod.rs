@@ -223,7 +223,8 @@ impl FinalConfiguration {
 
 /// The candidates of one request: which fingers take part and how the hand is pre-shaped.
 struct Grasp<'m> {
-    pre: &'m PreShape,
+    /// The realisation's pre-shapes, the best first, then wider ones.
+    pres: &'m [PreShape],
     wrap: bool,
     /// Kinematic fingers taking part, h1 then h2.
     taking_part: Vec<usize>,
@@ -246,12 +247,12 @@ pub fn search(
     };
     let h1 = kin(&ctx.grasp.h1_fingers);
     let h2 = kin(&ctx.grasp.h2_fingers);
-    let Some(pre) = model.pre_shape(&h1, &h2) else {
+    let Some(pres) = model.pre_shapes(&h1, &h2).filter(|p| !p.is_empty()) else {
         return Ok(Vec::new());
     };
     let taking_part: Vec<usize> = h1.iter().chain(&h2).copied().collect();
     let grasp = Grasp {
-        pre,
+        pres,
         wrap: ctx.grasp.grasp_type.is_power(),
         free: (0..model.hand.fingers.len())
             .filter(|f| !taking_part.contains(f))
@@ -362,37 +363,62 @@ fn judge(
     // opposition, tightest first (beside a low object the fingertips must come down steeply
     // enough to meet its side), until one closes on the object feasibly.
     let width = (ctx.points[opposition.1] - ctx.points[opposition.0]).norm();
-    let mut openings: Vec<f64> = if grasp.wrap {
-        vec![0.0]
-    } else {
-        PRESHAPE_MARGINS
-            .iter()
-            .map(|m| grasp.pre.s_for_opening(width + m).min(0.8))
-            .chain(std::iter::once(0.0))
-            .collect()
+    let openings = |pre: &PreShape| -> Vec<f64> {
+        let mut o: Vec<f64> = if grasp.wrap {
+            vec![0.0]
+        } else {
+            PRESHAPE_MARGINS
+                .iter()
+                .map(|m| pre.s_for_opening(width + m).min(0.8))
+                .chain(std::iter::once(0.0))
+                .collect()
+        };
+        o.dedup_by(|a, b| (*a - *b).abs() < 0.03);
+        o
     };
-    openings.dedup_by(|a, b| (*a - *b).abs() < 0.03);
-    let mut best: Option<(FinalConfiguration, f64)> = None;
+    // The best pre-shape first. A fingertip grasp of an object wider than it ever opens, whose
+    // every try with it touched one side only (the fingertips land on the top), tries once
+    // more with the first wider pre-shape that opens past the tightest margin (else the
+    // widest).
+    let wider = if grasp.wrap || width <= grasp.pres[0].widest() {
+        None
+    } else {
+        grasp.pres[1..]
+            .iter()
+            .find(|p| p.widest() >= width + PRESHAPE_MARGINS[0])
+            .or(grasp.pres[1..].last())
+    };
+    let mut best: Option<(FinalConfiguration, f64, &PreShape)> = None;
     // The tightest opening first; then, while none is feasible, the best opening with the hand
     // turned about the approach (YAWS_DEG): the fingers' row then meets a curved or skewed
     // object elsewhere instead of landing on its top.
-    let mut tries: Vec<(f64, f64)> = openings.iter().map(|&s0| (s0, 0.0)).collect();
+    let first = &grasp.pres[0];
+    let mut tries: Vec<(&PreShape, f64, f64)> =
+        openings(first).iter().map(|&s0| (first, s0, 0.0)).collect();
     let rank = |c: &FinalConfiguration| {
         let (feasible, two_sided, score) = c.rank();
         (feasible, two_sided, c.contacts.len().min(3), score)
     };
     let mut k = 0;
-    let mut yawed = false;
+    let (mut yawed, mut widened) = (false, false);
     while k < tries.len() {
-        let (s0, yaw) = tries[k];
+        let (pre, s0, yaw) = tries[k];
         k += 1;
-        if let Some(c) = judge_with(ctx, model, grasp, object, opposition, approach, (s0, yaw))? {
+        if let Some(c) = judge_with(
+            ctx,
+            model,
+            grasp,
+            object,
+            opposition,
+            approach,
+            (pre, s0, yaw),
+        )? {
             let c = c.rated(ctx, beat);
-            if best.as_ref().is_none_or(|(b, _)| {
+            if best.as_ref().is_none_or(|(b, _, _)| {
                 rank(&c).partial_cmp(&rank(b)) == Some(std::cmp::Ordering::Greater)
             }) {
                 let done = c.feasible;
-                best = Some((c, s0));
+                best = Some((c, s0, pre));
                 if done {
                     break;
                 }
@@ -402,15 +428,25 @@ fn judge(
         // as the openings, and a search that has its plans gains little robustness from them.
         if k == tries.len() && !yawed && beat.feasible == f64::NEG_INFINITY {
             yawed = true;
-            let s0 = best.as_ref().map_or(openings[0], |(_, s0)| *s0);
-            tries.extend(YAWS_DEG.iter().map(|d| (s0, d.to_radians())));
+            let (pre, s0) = best
+                .as_ref()
+                .map_or((first, openings(first)[0]), |(_, s0, p)| (*p, *s0));
+            tries.extend(YAWS_DEG.iter().map(|d| (pre, s0, d.to_radians())));
+        }
+        if k == tries.len()
+            && !widened
+            && best.as_ref().is_none_or(|(b, _, _)| !b.two_sided)
+            && let Some(w) = wider
+        {
+            widened = true;
+            tries.extend(openings(w).iter().map(|&s0| (w, s0, 0.0)));
         }
     }
-    Ok(best.map(|(c, _)| c))
+    Ok(best.map(|(c, _, _)| c))
 }
 
-/// [`judge`] with the taking-part fingers pre-shaped at path parameter `s0` and the opposition
-/// turned by `yaw` (radians) about the approach through its midpoint.
+/// [`judge`] with the taking-part fingers in pre-shape `pre` at path parameter `s0` and the
+/// opposition turned by `yaw` (radians) about the approach through its midpoint.
 fn judge_with(
     ctx: &SearchContext,
     model: &KinematicModel,
@@ -418,11 +454,10 @@ fn judge_with(
     object: &ObjectView,
     (oc1, oc2): (usize, usize),
     approach: &Vector3<f64>,
-    (s0, yaw): (f64, f64),
+    (pre, s0, yaw): (&PreShape, f64, f64),
 ) -> Result<Option<FinalConfiguration>, FieldError> {
     let hand = &model.hand;
     let syn = &model.synergy;
-    let pre = grasp.pre;
     let (mut p1, mut p2) = (ctx.points[oc1], ctx.points[oc2]);
     if yaw != 0.0 {
         let mid = Point3::from((p1.coords + p2.coords) / 2.0);
