@@ -29,12 +29,13 @@ impl CloudIndex {
     }
 
     /// Indices of the points closer than `radius`, in no particular order.
-    pub fn within_unsorted(&self, p: &Point3<f64>, radius: f64) -> Vec<usize> {
+    pub fn within_unsorted(&self, p: &Point3<f64>, radius: f64) -> impl Iterator<Item = usize> {
+        // An iterator over kiddo's own result: the hot callers stop at the first hit
+        // (`PosedCollision::any_within`) or only loop, so no second Vec is built.
         self.tree
             .within_unsorted::<SquaredEuclidean>(&[p.x, p.y, p.z], radius * radius)
             .into_iter()
             .map(|n| n.item as usize)
-            .collect()
     }
 
     /// Index of and distance to the nearest point.

@@ -373,7 +373,6 @@ impl PosedCollision {
         let (c, r) = self.spheres[k];
         index
             .within_unsorted(&c, r + margin.max(0.0))
-            .into_iter()
             .filter_map(|i| {
                 self.signed_distance_below(k, &points[i], margin)
                     .map(|d| (i, d))
@@ -393,7 +392,6 @@ impl PosedCollision {
         let (c, r) = self.spheres[k];
         index
             .within_unsorted(&(c + offset), r + margin.max(0.0))
-            .into_iter()
             .any(|i| {
                 self.signed_distance_below(k, &(points[i] - offset), margin)
                     .is_some()
