@@ -6,8 +6,9 @@
 //!    each approach to try, the pre-shaped hand moved in along the approach from the pre-grasp
 //!    distance until it would touch the object (the visible points and their completion)
 //!    or the table — so proposals are clear of both by construction. Fingertip pre-shapes try
-//!    several openings; while a candidate has no feasible one (and the search still lacks
-//!    feasible plans) the best opening is tried again with the hand turned about the approach
+//!    several openings (and, for an object wider than the best pre-shape ever opens, touched on
+//!    one side only, a wider pre-shape); while a candidate has no feasible one (and the search
+//!    still lacks feasible plans) the best opening is tried again with the hand turned about the approach
 //!    ([`YAWS_DEG`]): beside a curved or skewed object (a banana, a box seen at a corner) a
 //!    fingertip of the row otherwise lands on the object's top and holds the hand up.
 //! 2. **Close** ([`closing_sweep`]): the taking-part fingers close along the synergy until their
