@@ -63,7 +63,7 @@ fn a_scene_builds_and_steps_with_the_object_at_rest_on_the_table() {
 fn the_squeeze_depth_follows_the_servo_stiffness() {
     use graspd_sim::hand::{GRIP_FORCE, MAX_SQUEEZE_DEPTH};
     let Some(data) = testdata() else { return };
-    let dir = tempdir();
+    let dir = tempdir("squeeze-depth");
     let with_scale = |scale: f64| {
         let toml = hand_toml(
             &dir,
@@ -99,7 +99,7 @@ fn the_balanced_grip_follows_the_force_limits() {
     assert!(!balanced("shadow"));
     assert!(!balanced("robotiq_2f85"));
     assert!(!balanced("allegro"));
-    let dir = tempdir();
+    let dir = tempdir("force-limits");
     let toml = hand_toml(
         &dir,
         "shadow_balanced",
@@ -271,7 +271,7 @@ fn a_robotiq_trial_on_the_tomato_soup_can_succeeds_against_graspd() {
     let (touch, close) = (rec.moved_touch_mm.unwrap(), rec.moved_close_mm.unwrap());
     assert!(touch < 5.0 && close < 20.0, "{touch} {close}");
 
-    let out = tempdir();
+    let out = tempdir("robotiq-bench");
     let report = run_bench(
         &BenchConfig {
             hands: vec!["robotiq_2f85".into()],
@@ -427,8 +427,9 @@ fn hand_toml(dir: &std::path::Path, name: &str, model: &std::path::Path, line: &
     toml
 }
 
-fn tempdir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("graspd-sim-test-{}", std::process::id()));
+/// A scratch folder of one test: tests run in parallel and some remove theirs when done.
+fn tempdir(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("graspd-sim-test-{}-{test}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
 }
@@ -465,7 +466,7 @@ fn the_completion_covers_the_unseen_side_of_a_can_and_a_banana() {
 /// 72–100 %); a file that is not a results.json is refused by name.
 #[test]
 fn compare_pairs_two_runs_and_refuses_a_foreign_file() {
-    let dir = tempdir().join("compare");
+    let dir = tempdir("compare");
     std::fs::create_dir_all(&dir).unwrap();
     let run = |held: usize| {
         let records: Vec<String> = (0..10)
