@@ -334,13 +334,14 @@ fn kinematic_plans_are_deterministic() {
     assert_eq!(a.hand_pose, b.hand_pose);
 }
 
-/// A fingertip grasp of an object wider than the best pre-shape opens: the Shadow's thumb
-/// against its four fingers opens 64 mm at most in its best pre-shape, and the pudding box
-/// lying flat is 89 mm across. With the best pre-shape alone none of six views gave a feasible
-/// precision grasp (the fingertips land on the box's top); with the wider pre-shapes half do,
-/// each touching with the thumb and the fingers.
+/// Fingertip grasps of a wide box: the Shadow's pre-shapes for its thumb against its four
+/// fingers open wider and wider, at least 2 cm apart (`WIDER_STEP`), the widest over 12 cm, and
+/// two of six views of the pudding box lying flat (89 mm across) give a feasible precision
+/// grasp touching with the thumb and the fingers. (With every flexion joint closing together
+/// the best pre-shape opened 64 mm, the fingertips landed on the box's top, and only the wider
+/// pre-shapes made three of these views feasible; knuckle first it opens 119 mm and two are.)
 #[test]
-fn fingertip_grasps_of_wide_boxes_open_wider_pre_shapes() {
+fn fingertip_grasps_of_wide_boxes_touch_with_thumb_and_fingers() {
     let m = model(SHARED_HANDS[0]);
     let thumb = m
         .hand
@@ -350,7 +351,7 @@ fn fingertip_grasps_of_wide_boxes_open_wider_pre_shapes() {
         .unwrap();
     let fingers: Vec<usize> = (0..m.hand.fingers.len()).filter(|&f| f != thumb).collect();
     let pres = m.pre_shapes(&[thumb], &fingers).unwrap();
-    assert!(pres[0].widest() < 0.07, "{}", pres[0].widest());
+    assert!(pres.len() >= 2, "{} pre-shapes", pres.len());
     for w in pres.windows(2) {
         assert!(w[1].widest() >= w[0].widest() + 0.02 - 1e-12);
     }
@@ -383,5 +384,45 @@ fn fingertip_grasps_of_wide_boxes_open_wider_pre_shapes() {
             );
         }
     }
-    assert!(feasible >= 3, "{feasible} of 6 feasible");
+    assert!(feasible >= 2, "{feasible} of 6 feasible");
+}
+
+/// The closing path (`FlexionJoint::at`): each finger's palm-side flexion joint leads (half its
+/// range at s = ½), the others follow with s² (a quarter), so a Shadow finger half closed is
+/// straighter — its tip further from the palm frame's origin — than with every joint at half
+/// its range, and the path ends where it did, every joint at its far limit.
+#[test]
+fn fingers_close_knuckle_first() {
+    let m = model(SHARED_HANDS[0]);
+    let home = m.hand.tree.home_configuration();
+    for (f, fs) in m.synergy.fingers.iter().enumerate() {
+        assert!(fs.flexion.len() >= 2, "{}", m.hand.fingers[f].name);
+        for (k, fj) in fs.flexion.iter().enumerate() {
+            assert_eq!(fj.leads, k == 0);
+            let range = fj.closed - fj.open;
+            let share = if k == 0 { 0.5 } else { 0.25 };
+            assert!((fj.at(0.5) - (fj.open + share * range)).abs() < 1e-12);
+            assert!((fj.at(0.0) - fj.open).abs() < 1e-12);
+            assert!((fj.at(1.0) - fj.closed).abs() < 1e-12);
+        }
+        if m.hand.fingers[f].name.starts_with("th") {
+            continue;
+        }
+        let mut knuckle_first = home.clone();
+        m.synergy
+            .close(&m.hand, &mut knuckle_first, &[(f, 0.5)])
+            .unwrap();
+        let mut together = home.clone();
+        for fj in &fs.flexion {
+            together[fj.joint] = fj.open + 0.5 * (fj.closed - fj.open);
+        }
+        let reach = |q: &[f64]| m.hand.fingertips(q).unwrap()[f].coords.norm();
+        assert!(
+            reach(&knuckle_first) > reach(&together) + 0.005,
+            "{}: {} vs {}",
+            m.hand.fingers[f].name,
+            reach(&knuckle_first),
+            reach(&together)
+        );
+    }
 }

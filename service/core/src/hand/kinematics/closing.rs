@@ -50,6 +50,22 @@ pub struct FlexionJoint {
     /// Value with the finger open (the home pose) and closed (the far limit).
     pub open: f64,
     pub closed: f64,
+    /// Whether it is the finger's palm-side flexion joint, which leads the close.
+    pub leads: bool,
+}
+
+impl FlexionJoint {
+    /// The joint's value at closing parameter `s` (0 open … 1 closed): the palm-side joint
+    /// moves with s, the others with s², so a finger first turns at its knuckle, its tip
+    /// travelling across toward the opposing fingers, and curls at the end of the close. With
+    /// every joint moving with s the tips hooked over the top of a low or boxy object: the
+    /// pre-shaped fingers' middle links met the top first, and the Shadow hand's contacts on
+    /// the potted meat can lay within 1–1.5 cm of its rim (docs/final-configuration.md,
+    /// "The closing path").
+    pub fn at(&self, s: f64) -> f64 {
+        let share = if self.leads { s } else { s * s.abs() };
+        self.open + share * (self.closed - self.open)
+    }
 }
 
 /// One finger's synergy.
@@ -158,6 +174,7 @@ impl HandSynergy {
                         joint: j,
                         open: home[j],
                         closed: toward,
+                        leads: flexion.is_empty(),
                     });
                 } else {
                     setting.push(j);
@@ -204,7 +221,7 @@ impl HandSynergy {
         for &(f, s) in fingers {
             let fs = &self.fingers[f];
             for fj in &fs.flexion {
-                q[fj.joint] = fj.open + s.clamp(0.0, 1.5) * (fj.closed - fj.open);
+                q[fj.joint] = fj.at(s.clamp(0.0, 1.5));
                 held.push(fj.joint);
             }
             project |= fs.constrained;

@@ -99,7 +99,7 @@ impl SweepHand<'_> {
         for (f, sv) in s {
             let fs = &self.synergy.fingers[*f];
             for (fj, &v) in fs.flexion.iter().zip(sv) {
-                q[fj.joint] = fj.open + v * (fj.closed - fj.open);
+                q[fj.joint] = fj.at(v);
                 held.push(fj.joint);
             }
             constrained |= fs.constrained;

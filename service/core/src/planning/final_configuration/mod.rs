@@ -664,11 +664,6 @@ fn judge_with(
              balance without a third contact",
             hand.fingers[f1].name, hand.fingers[f2].name
         ))
-    } else if gii < ctx.options.epsilon {
-        Some(format!(
-            "final configuration: S = {gii:.3} < ε = {}",
-            ctx.options.epsilon
-        ))
     } else if plane_clearance.is_some_and(|c| c < -PLANE_TOLERANCE) {
         Some(format!(
             "the closed hand reaches {:.1} mm into the support plane",
@@ -678,6 +673,12 @@ fn judge_with(
         Some(format!(
             "the linked fingers would push the object {:.0} mm before both touch",
             closed.push * 1e3
+        ))
+    } else if gii < ctx.options.epsilon {
+        // Last, so that S < ε alone can be waived for a firm grip (`rated`).
+        Some(format!(
+            "final configuration: S = {gii:.3} < ε = {}",
+            ctx.options.epsilon
         ))
     } else {
         None

@@ -30,7 +30,7 @@ pub(super) fn advance_contacts(
         }
         let mut q = closed.joints.clone();
         for (fj, &v) in syn.fingers[*f].flexion.iter().zip(sv) {
-            q[fj.joint] = fj.open + (v + DS) * (fj.closed - fj.open);
+            q[fj.joint] = fj.at(v + DS);
         }
         let fk1 = hand.tree.forward(&q)?;
         let mut speed: f64 = 0.0;
@@ -63,7 +63,7 @@ pub(super) fn joints_at(
     let mut q = closed.joints.clone();
     for (f, sv) in s {
         for (fj, &v) in syn.fingers[*f].flexion.iter().zip(sv) {
-            q[fj.joint] = fj.open + v * (fj.closed - fj.open);
+            q[fj.joint] = fj.at(v);
         }
     }
     hand.tree.clamp(&mut q);

@@ -281,7 +281,7 @@ fn unlimited_squeeze(
             let mut base = q.to_vec();
             for (f, sv) in &s {
                 for (fj, &v) in syn.fingers[*f].flexion.iter().zip(sv) {
-                    base[fj.joint] = fj.open + v * (fj.closed - fj.open);
+                    base[fj.joint] = fj.at(v);
                 }
             }
             hand.tree.clamp(&mut base);
