@@ -364,16 +364,18 @@ async fn bad_uploads_leave_nothing_behind() {
             "assets": big.assets.iter().map(|a| serde_json::json!({"path": a.path, "data": base64(&a.data)})).collect::<Vec<_>>(),
         },
     });
-    let (status, _, _, _) = rest_error(
-        http()
-            .post(server.rest_url("/v1/hands"))
-            .json(&body)
-            .send()
-            .await
-            .unwrap(),
-    )
-    .await;
-    assert_eq!(status, 413);
+    // 413 — or the connection closed while the client still writes: the server answers from
+    // the declared size before reading the body, and an HTTP/1.1 writer may get EPIPE instead
+    // of the status (draining the body first is issue 20's; CI met it on 2026-12-04).
+    match http()
+        .post(server.rest_url("/v1/hands"))
+        .json(&body)
+        .send()
+        .await
+    {
+        Ok(response) => assert_eq!(rest_error(response).await.0, 413),
+        Err(e) => assert!(e.is_request() && !e.is_connect() && !e.is_timeout(), "{e}"),
+    }
     // REST: the same validation, named fields.
     let (status, code, field, message) = rest_error(
         http()
