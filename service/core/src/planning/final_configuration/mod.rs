@@ -79,9 +79,10 @@ pub const FIRM_ROBUSTNESS: f64 = 0.8;
 /// 109 → 111, Allegro 116 → 123 of 160; the planner bench's feasible Shadow 23 → 30 and Robotiq
 /// 29 → 34 of 40, at 1.5–2.5 times their median planning time.
 const YAWS_DEG: [f64; 4] = [20.0, -20.0, 40.0, -40.0];
-/// A contact patch whose unit normals' mean is shorter than this lies astride an edge (a box's
-/// rim): its mean normal is neither face's, and a fingertip there rolls off the edge when the
-/// hand squeezes, so the robustness does not count it.
+/// A contact whose neighbourhood's unit normals have a mean shorter than this lies by an edge
+/// (a box's or a can's rim; the neighbourhood: [`closing_sweep::COHERENCE_MARGIN`]): its mean
+/// normal is neither face's, and a fingertip there rolls onto the edge when the hand squeezes,
+/// so the robustness does not count it.
 pub const EDGE_COHERENCE: f64 = 0.9;
 /// Times the hand is raised when the closed fingers reach into the table.
 const MAX_RAISES: usize = 2;
