@@ -225,8 +225,8 @@ fn proposals_clear_the_plane_and_come_ranked() {
 /// than the depth and the squeeze is scaled back), every finger that flexes against the object presses inward (the
 /// balanced grip gives each finger its share of the force, so a stiff finger with a short lever
 /// moves little: `planning/grip_forces.rs`), none lifts off by more than half the depth or
-/// slides across the surface further than the depth, and the squeezed hand stays out of the
-/// table.
+/// slides across the surface further than the depth, no flexion joint opens, and the squeezed
+/// hand stays out of the table.
 #[test]
 fn the_squeeze_presses_contacts_by_the_set_depth_and_not_the_table() {
     for depth in [0.005, 0.02] {
@@ -310,6 +310,20 @@ fn the_squeeze_presses_contacts_by_the_set_depth_and_not_the_table() {
                     least >= -0.001 - 0.5 * depth,
                     "{file} {finger}: a contact moves out {least} m"
                 );
+            }
+            // No flexion joint opens from the touch: where the balanced grip would have a
+            // joint push back, it holds (a thumb so turned away let an apple roll out).
+            for fs in &m.synergy.fingers {
+                for fj in &fs.flexion {
+                    let j = fj.joint;
+                    assert!(
+                        (qs[j] - qg[j]) * (fj.closed - fj.open).signum() >= -1e-9,
+                        "{file}: the squeeze opens {} from {} to {}",
+                        m.hand.tree.joints[j].name,
+                        qg[j],
+                        qs[j]
+                    );
+                }
             }
             let plane = p.support_plane.unwrap();
             let c = posed(&m, &qs, &p.hand_pose).plane_clearance(&plane);
