@@ -350,10 +350,12 @@ fn kinematic_plans_are_deterministic() {
 
 /// Fingertip grasps of a wide box: the Shadow's pre-shapes for its thumb against its four
 /// fingers open wider and wider, at least 2 cm apart (`WIDER_STEP`), the widest over 12 cm, and
-/// two of six views of the pudding box lying flat (89 mm across) give a feasible precision
+/// a view of the pudding box lying flat (89 mm across, 35 mm high) gives a feasible precision
 /// grasp touching with the thumb and the fingers. (With every flexion joint closing together
 /// the best pre-shape opened 64 mm, the fingertips landed on the box's top, and only the wider
-/// pre-shapes made three of these views feasible; knuckle first it opens 119 mm and two are.)
+/// pre-shapes made three of these views feasible; knuckle first it opens 119 mm and two were.
+/// One of those two held the box by fingertips on its top edges, which the robustness no longer
+/// counts (`COHERENCE_RADIUS`): they roll over the edge when squeezed.)
 #[test]
 fn fingertip_grasps_of_wide_boxes_touch_with_thumb_and_fingers() {
     let m = model(SHARED_HANDS[0]);
@@ -398,7 +400,7 @@ fn fingertip_grasps_of_wide_boxes_touch_with_thumb_and_fingers() {
             );
         }
     }
-    assert!(feasible >= 2, "{feasible} of 6 feasible");
+    assert!(feasible >= 1, "{feasible} of 6 feasible");
 }
 
 /// The closing path (`FlexionJoint::at`): each finger's palm-side flexion joint leads (half its

@@ -24,10 +24,10 @@ pub const BISECTIONS: usize = 4;
 pub const TOUCH_MARGIN: f64 = 0.002;
 /// Points this close to a touching link make its contact patch, m.
 pub const PATCH_MARGIN: f64 = 0.004;
-/// Points this close to a touching link tell whether its contact lies on one face or by an
-/// edge (its coherence), m: twice the patch, since a pad pressed by the squeeze flattens and
-/// rolls toward an edge that the touch itself barely reaches.
-pub const COHERENCE_MARGIN: f64 = 0.008;
+/// Object points this close to a contact tell whether it lies on one face or by an edge (its
+/// coherence), m: about a fingertip pad's radius, the reach of the pad rolling under the
+/// squeeze.
+pub const COHERENCE_RADIUS: f64 = 0.008;
 
 /// One contact found by the sweep.
 #[derive(Debug, Clone, PartialEq)]
@@ -310,35 +310,24 @@ pub fn mean_normal(normals: impl Iterator<Item = Vector3<f64>>) -> Option<(Vecto
     Some((unit, sum.norm() / n as f64))
 }
 
-/// The coherence of the object's normals within [`COHERENCE_MARGIN`] of `pieces` (the length
-/// of their unit mean, [`mean_normal`]).
+/// The coherence of the object's normals within [`COHERENCE_RADIUS`] of a contact's
+/// `position` (the length of their unit mean, [`mean_normal`]).
 ///
 /// A fingertip on a can's side a few mm below its rim has a patch of side points only, yet
 /// under the squeeze it rolls onto the rim and the can slips out downward: measured on the
 /// Table 5.2 run (20 trials per cell, paired), judging the edge by the patch alone left the
-/// Shadow's tuna-can grasps on the rim (7 of 20 held); by twice the patch 19 of 20 held
-/// (docs/final-configuration.md, "Contacts by an edge, and no joint opens").
-fn neighbourhood_coherence(
-    posed: &PosedCollision,
-    pieces: &[usize],
-    object: &ObjectView,
-) -> Option<f64> {
-    let mut near: Vec<usize> = Vec::new();
-    for &k in pieces {
-        let (c, r) = posed.sphere(k);
-        if !object.near(&c, r + COHERENCE_MARGIN) {
-            continue;
-        }
-        near.extend(
-            posed
-                .touching(k, &object.points, &object.index, COHERENCE_MARGIN)
-                .into_iter()
-                .map(|(i, _)| i),
-        );
-    }
-    near.sort_unstable();
-    near.dedup();
-    mean_normal(near.iter().map(|&i| object.normals.get(object.source[i]))).map(|(_, c)| c)
+/// Shadow's tuna-can grasps on the rim (7 of 20 held). The neighbourhood is a ball about the
+/// contact, not a band about the link: a finger coming down beside a low box passes its top
+/// edge with the rest of its link, wherever its tip presses (docs/final-configuration.md,
+/// "Contacts by an edge, and no joint opens").
+fn neighbourhood_coherence(object: &ObjectView, position: &Point3<f64>) -> Option<f64> {
+    mean_normal(
+        object
+            .index
+            .within_unsorted(position, COHERENCE_RADIUS)
+            .map(|i| object.normals.get(object.source[i])),
+    )
+    .map(|(_, c)| c)
 }
 
 /// The contact patch of `body`'s pieces: the object points within [`PATCH_MARGIN`], their mean
@@ -378,7 +367,7 @@ pub fn patch(
         pts.iter()
             .map(|&(i, _)| object.normals.get(object.source[i])),
     )?;
-    let coherence = neighbourhood_coherence(posed, pieces, object)?;
+    let coherence = neighbourhood_coherence(object, &position)?;
     let point = pts
         .iter()
         .min_by(|a, b| a.1.total_cmp(&b.1))
@@ -482,8 +471,9 @@ mod tests {
     }
 
     /// A fingertip touching a can's side halfway up lies on one face; one touching it 6 mm
-    /// below the rim is by an edge (the squeeze rolls it onto the rim), though its contact
-    /// patch alone holds side points only.
+    /// below the rim is by an edge (the squeeze rolls it onto the rim: top points lie within
+    /// `COHERENCE_RADIUS` of the contact), though its contact patch alone holds side points
+    /// only.
     #[test]
     fn a_fingertip_below_a_rim_is_by_an_edge() {
         use crate::cloud::{CloudIndex, LazyNormals, Orientation};

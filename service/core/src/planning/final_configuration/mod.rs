@@ -80,7 +80,7 @@ pub const FIRM_ROBUSTNESS: f64 = 0.8;
 /// 29 → 34 of 40, at 1.5–2.5 times their median planning time.
 const YAWS_DEG: [f64; 4] = [20.0, -20.0, 40.0, -40.0];
 /// A contact whose neighbourhood's unit normals have a mean shorter than this lies by an edge
-/// (a box's or a can's rim; the neighbourhood: [`closing_sweep::COHERENCE_MARGIN`]): its mean
+/// (a box's or a can's rim; its neighbourhood: [`closing_sweep::COHERENCE_RADIUS`]): its mean
 /// normal is neither face's, and a fingertip there rolls onto the edge when the hand squeezes,
 /// so the robustness does not count it.
 pub const EDGE_COHERENCE: f64 = 0.9;
