@@ -317,7 +317,7 @@ fn the_squeeze_presses_contacts_by_the_set_depth_and_not_the_table() {
                 for fj in &fs.flexion {
                     let j = fj.joint;
                     assert!(
-                        (qs[j] - qg[j]) * (fj.closed - fj.open).signum() >= -1e-9,
+                        (qs[j] - qg[j]) * fj.closing_sign() >= -1e-9,
                         "{file}: the squeeze opens {} from {} to {}",
                         m.hand.tree.joints[j].name,
                         qg[j],

@@ -66,6 +66,11 @@ impl FlexionJoint {
         let share = if self.leads { s } else { s * s.abs() };
         self.open + share * (self.closed - self.open)
     }
+
+    /// +1 when the joint's value grows as the finger closes, −1 when it shrinks.
+    pub fn closing_sign(&self) -> f64 {
+        (self.closed - self.open).signum()
+    }
 }
 
 /// One finger's synergy.

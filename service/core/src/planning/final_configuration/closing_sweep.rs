@@ -367,6 +367,10 @@ pub fn patch(
         pts.iter()
             .map(|&(i, _)| object.normals.get(object.source[i])),
     )?;
+    // No object point within reach of the patch's mean (a patch wrapping a thin part or a
+    // rounded corner, its mean inside it) drops the contact: that is how the standard run of
+    // 2026-12-04 (session 11) was measured. Keeping it with the patch's own coherence changes
+    // every hand's planner-bench digest and is not yet measured in simulation.
     let coherence = neighbourhood_coherence(object, &position)?;
     let point = pts
         .iter()

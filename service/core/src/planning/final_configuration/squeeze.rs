@@ -211,7 +211,7 @@ fn unlimited_squeeze(
             let mut rows: Vec<Vec<(microlp::Variable, f64)>> = vec![Vec::new(); mine.len()];
             let mut steps = Vec::new();
             for fj in &fs.flexion {
-                let dir = (fj.closed - fj.open).signum();
+                let dir = fj.closing_sign();
                 let (lo, hi) = hand.tree.joints[fj.joint].limits();
                 let room = if dir > 0.0 {
                     hi - q[fj.joint]
@@ -377,7 +377,7 @@ fn balanced_squeeze(
             for (i, d) in &v {
                 lever[*i] += d.dot(&inward[*i]).powi(2);
             }
-            moves.push((fj.joint, (fj.closed - fj.open).signum(), v));
+            moves.push((fj.joint, fj.closing_sign(), v));
         }
     }
     let grip: Vec<GripContact> = contacts
