@@ -367,15 +367,15 @@ pub fn patch(
         pts.iter()
             .map(|&(i, _)| object.normals.get(object.source[i])),
     )?;
-    // No object point within reach of the patch's mean (a patch wrapping a thin part or a
-    // rounded corner, its mean inside it) drops the contact: that is how the standard run of
-    // 2026-12-04 (session 11) was measured. Keeping it with the patch's own coherence changes
-    // every hand's planner-bench digest and is not yet measured in simulation.
-    let coherence = neighbourhood_coherence(object, &position)?;
-    let point = pts
+    let nearest = pts
         .iter()
         .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|&(i, _)| object.source[i])?;
+        .map(|&(i, _)| i)?;
+    // A patch wrapping a thin part or a rounded corner has its mean inside the object, with no
+    // object point within reach: its edge is then judged about its nearest point.
+    let coherence = neighbourhood_coherence(object, &position)
+        .or_else(|| neighbourhood_coherence(object, &object.points[nearest]))?;
+    let point = object.source[nearest];
     let gap = pieces
         .iter()
         .map(|&k| posed.signed_distance(k, &position).abs())
