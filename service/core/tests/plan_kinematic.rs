@@ -53,11 +53,11 @@ fn values(joints: &[(String, f64)]) -> Vec<f64> {
 }
 
 /// The model's collision geometry at `q` with the hand frame at `pose`.
-fn posed(
-    m: &KinematicModel,
+fn posed<'m>(
+    m: &'m KinematicModel,
     q: &[f64],
     pose: &Pose,
-) -> graspd_core::hand::kinematics::PosedCollision {
+) -> graspd_core::hand::kinematics::PosedCollision<'m> {
     m.collision.posed(&m.hand, q, &pose.isometry()).unwrap()
 }
 

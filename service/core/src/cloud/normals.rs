@@ -1,13 +1,17 @@
 //! Surface normals by k-nearest-neighbour PCA (method.md §3), and the k-d tree index the planner
 //! shares for its neighbourhood queries (Eq 5.6).
 
-use kiddo::{KdTree, SquaredEuclidean};
+use kiddo::SquaredEuclidean;
+
+/// kiddo's k-d tree with BUCKET points per leaf.
+type KdTree = kiddo::float::kdtree::KdTree<f64, u64, 3, BUCKET, u32>;
+const BUCKET: usize = 64;
 use nalgebra::{Point3, Vector3};
 use std::cell::OnceCell;
 
 /// A k-d tree over the cloud's points (kiddo), indexed by point number.
 pub struct CloudIndex {
-    tree: KdTree<f64, 3>,
+    tree: KdTree,
 }
 
 impl CloudIndex {
@@ -36,6 +40,14 @@ impl CloudIndex {
             .within_unsorted::<SquaredEuclidean>(&[p.x, p.y, p.z], radius * radius)
             .into_iter()
             .map(|n| n.item as usize)
+    }
+
+    /// Whether `q` lies within `radius` of `p` by the very test (and float arithmetic) of
+    /// [`Self::within_unsorted`]: a caller that filters an earlier, wider query's points with it
+    /// gets that query's answer.
+    pub fn within_radius(p: &Point3<f64>, q: &Point3<f64>, radius: f64) -> bool {
+        let d = [p.x - q.x, p.y - q.y, p.z - q.z];
+        d.iter().map(|v| v * v).fold(0.0, |a, b| a + b) <= radius * radius
     }
 
     /// Index of and distance to the nearest point.

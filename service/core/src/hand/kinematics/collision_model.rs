@@ -15,6 +15,7 @@
 //! and which points one piece touches (signed distance below a margin, found through the cloud's
 //! k-d tree within the piece's bounding sphere).
 
+use super::convex_faces::ConvexFaces;
 use super::hand_model::KinematicHand;
 use super::kinematic_tree::GeomShape;
 use crate::cloud::Plane;
@@ -23,6 +24,10 @@ use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 use parry3d_f64::math::{Pose3, Rot3, Vector as PVec};
 use parry3d_f64::shape::SharedShape;
 use std::sync::Arc;
+
+/// How far past a margin [`PosedCollision::round_distance_bound`] must be to decide without
+/// parry's projection, m: float rounding between the two computations is far below it.
+const ROUND_BOUND_SLOP: f64 = 1e-9;
 
 fn pv(v: &Vector3<f64>) -> PVec {
     PVec::new(v.x, v.y, v.z)
@@ -54,10 +59,18 @@ pub struct CollisionPiece {
 }
 
 /// Face planes (outward unit normal, offset) of a convex piece.
-pub type FacePlanes = Arc<[(PVec, f64)]>;
+pub type FacePlanes = Arc<ConvexFaces>;
 
-/// The face planes of a convex polyhedron or a box.
+/// The face planes of a convex polyhedron or a box, grouped about the centre of its bounds.
 fn face_planes(shape: &SharedShape) -> Option<FacePlanes> {
+    let aabb = shape.compute_local_aabb();
+    let centre = (aabb.mins + aabb.maxs) * 0.5;
+    let planes = plane_list(shape)?;
+    Some(Arc::new(ConvexFaces::new(planes, centre)))
+}
+
+/// The face planes of a convex polyhedron or a box, as listed by its shape.
+fn plane_list(shape: &SharedShape) -> Option<Vec<(PVec, f64)>> {
     if let Some(b) = shape.as_cuboid() {
         let h = b.half_extents;
         let planes: Vec<(PVec, f64)> = vec![
@@ -68,7 +81,7 @@ fn face_planes(shape: &SharedShape) -> Option<FacePlanes> {
             (PVec::Z, h.z),
             (-PVec::Z, h.z),
         ];
-        return Some(planes.into());
+        return Some(planes);
     }
     let poly = shape.as_convex_polyhedron()?;
     let pts = poly.points();
@@ -81,7 +94,7 @@ fn face_planes(shape: &SharedShape) -> Option<FacePlanes> {
             (f.normal, f.normal.dot(v))
         })
         .collect();
-    Some(planes.into())
+    Some(planes)
 }
 
 impl std::fmt::Debug for CollisionPiece {
@@ -100,15 +113,15 @@ pub struct HandCollision {
     pub pieces: Vec<CollisionPiece>,
 }
 
-/// The pieces posed in the world for one configuration and hand pose.
+/// The pieces posed in the world for one configuration and hand pose (the shapes are the
+/// hand's own, borrowed: the closing sweep poses the hand hundreds of times per candidate).
 #[derive(Debug, Clone)]
-pub struct PosedCollision {
-    pieces: Vec<(Pose3, SharedShape)>,
-    faces: Vec<Option<FacePlanes>>,
+pub struct PosedCollision<'h> {
+    hand: &'h HandCollision,
+    /// Pose of each piece's shape in the world.
+    poses: Vec<Pose3>,
     /// Bounding sphere of each piece in the world: centre and radius.
     spheres: Vec<(Point3<f64>, f64)>,
-    /// The body of each piece.
-    bodies: Vec<usize>,
 }
 
 impl KinematicHand {
@@ -186,10 +199,23 @@ impl KinematicHand {
                     0.5 * (lo.y + hi.y),
                     0.5 * (lo.z + hi.z),
                 );
+                // A round piece's own bounding sphere (its bounds' corners lie outside it: a
+                // capsule's by a tenth of its radius, the ball each touch test queries the
+                // cloud with); a polyhedron's stays its bounds' (its face-plane distance reaches
+                // past its corners).
+                let radius = if let Some(ball) = shape.as_ball() {
+                    ball.radius
+                } else if let Some(c) = shape.as_capsule() {
+                    c.half_height() + c.radius
+                } else if let Some(c) = shape.as_cylinder() {
+                    c.half_height.hypot(c.radius)
+                } else {
+                    0.5 * (hi - lo).length()
+                };
                 pieces.push(CollisionPiece {
                     body: b,
                     centre: pose * local_centre,
-                    radius: 0.5 * (hi - lo).length(),
+                    radius,
                     pose,
                     faces: face_planes(&shape),
                     shape,
@@ -240,7 +266,7 @@ impl HandCollision {
         hand: &KinematicHand,
         q: &[f64],
         hand_pose: &Isometry3<f64>,
-    ) -> Result<PosedCollision, FieldError> {
+    ) -> Result<PosedCollision<'_>, FieldError> {
         let fk = hand.tree.forward(q)?;
         // World ← hand frame ← palm body ← root.
         let root_in_world = hand_pose * (fk.body_poses[hand.palm] * hand.hand_frame).inverse();
@@ -253,61 +279,66 @@ impl HandCollision {
         &self,
         fk: &super::ForwardKinematics,
         root_in_world: &Isometry3<f64>,
-    ) -> PosedCollision {
-        let mut pieces = Vec::with_capacity(self.pieces.len());
+    ) -> PosedCollision<'_> {
+        let mut poses = Vec::with_capacity(self.pieces.len());
         let mut spheres = Vec::with_capacity(self.pieces.len());
         for p in &self.pieces {
             let body = root_in_world * fk.body_poses[p.body];
-            pieces.push((pose3(&(body * p.pose)), p.shape.clone()));
+            poses.push(pose3(&(body * p.pose)));
             spheres.push((body * p.centre, p.radius));
         }
         PosedCollision {
-            pieces,
-            faces: self.pieces.iter().map(|p| p.faces.clone()).collect(),
+            hand: self,
+            poses,
             spheres,
-            bodies: self.pieces.iter().map(|p| p.body).collect(),
         }
     }
 }
 
-impl PosedCollision {
+impl PosedCollision<'_> {
+    /// Piece `k`'s pose in the world, its shape and its face planes.
+    fn piece(&self, k: usize) -> (&Pose3, &SharedShape, Option<&ConvexFaces>) {
+        let p = &self.hand.pieces[k];
+        (&self.poses[k], &p.shape, p.faces.as_deref())
+    }
+
     /// Least signed distance of the hand geometry to `plane` (negative: through it), from each
     /// piece's support point against the plane normal.
     pub fn plane_clearance(&self, plane: &Plane) -> f64 {
-        (0..self.pieces.len())
+        (0..self.poses.len())
             .map(|k| self.piece_plane_clearance(k, plane))
             .fold(f64::INFINITY, f64::min)
     }
 
     /// Number of `points` deeper than `tolerance` inside any piece, counting at most `limit`.
     pub fn points_inside(&self, points: &[Point3<f64>], tolerance: f64, limit: usize) -> usize {
-        let boxes: Vec<_> = self
-            .pieces
-            .iter()
-            .map(|(pose, shape)| shape.compute_aabb(pose))
+        let boxes: Vec<_> = (0..self.poses.len())
+            .map(|k| {
+                let (pose, shape, _) = self.piece(k);
+                shape.compute_aabb(pose)
+            })
             .collect();
         let mut n = 0;
         for p in points {
             let v = PVec::new(p.x, p.y, p.z);
-            let inside = self.pieces.iter().zip(&boxes).zip(&self.faces).any(
-                |(((pose, shape), aabb), faces)| {
-                    if v.cmplt(aabb.mins).any() || v.cmpgt(aabb.maxs).any() {
-                        return false;
-                    }
-                    if let Some(faces) = faces {
-                        // Exact for a convex polyhedron, without GJK.
-                        let local = pose.inverse_transform_point(v);
-                        return faces.iter().all(|(n, d)| d - n.dot(local) > tolerance);
-                    }
-                    if !shape.contains_point(pose, v) {
-                        return false;
-                    }
-                    // Depth = distance to the boundary. parry's projection of a ball's or capsule's
-                    // exact centre is NaN (no direction): that point is the deepest one.
-                    let depth = (shape.project_point(pose, v, false).point - v).length();
-                    depth.is_nan() || depth > tolerance
-                },
-            );
+            let inside = boxes.iter().enumerate().any(|(k, aabb)| {
+                let (pose, shape, faces) = self.piece(k);
+                if v.cmplt(aabb.mins).any() || v.cmpgt(aabb.maxs).any() {
+                    return false;
+                }
+                if let Some(faces) = faces {
+                    // Exact for a convex polyhedron, without GJK.
+                    let local = pose.inverse_transform_point(v);
+                    return faces.distance_below(local, -tolerance, &mut 0).is_some();
+                }
+                if !shape.contains_point(pose, v) {
+                    return false;
+                }
+                // Depth = distance to the boundary. parry's projection of a ball's or capsule's
+                // exact centre is NaN (no direction): that point is the deepest one.
+                let depth = (shape.project_point(pose, v, false).point - v).length();
+                depth.is_nan() || depth > tolerance
+            });
             if inside {
                 n += 1;
                 if n >= limit {
@@ -322,14 +353,10 @@ impl PosedCollision {
     /// a box outside it, the largest face-plane distance, a lower bound of the distance (exact
     /// off the faces, short of it near edges and corners).
     pub fn signed_distance(&self, k: usize, p: &Point3<f64>) -> f64 {
-        let (pose, shape) = &self.pieces[k];
+        let (pose, shape, faces) = self.piece(k);
         let v = PVec::new(p.x, p.y, p.z);
-        if let Some(faces) = &self.faces[k] {
-            let local = pose.inverse_transform_point(v);
-            return faces
-                .iter()
-                .map(|(n, d)| n.dot(local) - d)
-                .fold(f64::NEG_INFINITY, f64::max);
+        if let Some(faces) = faces {
+            return faces.distance(pose.inverse_transform_point(v));
         }
         let proj = shape.project_point(pose, v, false);
         let d = (proj.point - v).length();
@@ -343,19 +370,27 @@ impl PosedCollision {
     /// [`Self::signed_distance`] when it is below `margin`, else None (polyhedra stop at the
     /// first face the point is `margin` outside of).
     pub fn signed_distance_below(&self, k: usize, p: &Point3<f64>, margin: f64) -> Option<f64> {
-        if let Some(faces) = &self.faces[k] {
-            let local = self.pieces[k]
-                .0
-                .inverse_transform_point(PVec::new(p.x, p.y, p.z));
-            let mut d = f64::NEG_INFINITY;
-            for (n, off) in faces.iter() {
-                let e = n.dot(local) - off;
-                if e >= margin {
-                    return None;
-                }
-                d = d.max(e);
-            }
-            return Some(d);
+        self.signed_distance_below_hinted(k, p, margin, &mut 0)
+    }
+
+    /// [`Self::signed_distance_below`] with a polyhedron's face `hint` tried first
+    /// ([`ConvexFaces::distance_below`]): the queries of one piece share it.
+    fn signed_distance_below_hinted(
+        &self,
+        k: usize,
+        p: &Point3<f64>,
+        margin: f64,
+        hint: &mut usize,
+    ) -> Option<f64> {
+        let (pose, _, faces) = self.piece(k);
+        if let Some(faces) = faces {
+            let local = pose.inverse_transform_point(PVec::new(p.x, p.y, p.z));
+            return faces.distance_below(local, margin, hint);
+        }
+        if let Some(far) = self.round_distance_bound(k, p)
+            && far >= margin + ROUND_BOUND_SLOP
+        {
+            return None;
         }
         let d = self.signed_distance(k, p);
         (d < margin).then_some(d)
@@ -371,13 +406,74 @@ impl PosedCollision {
         margin: f64,
     ) -> Vec<(usize, f64)> {
         let (c, r) = self.spheres[k];
-        index
-            .within_unsorted(&c, r + margin.max(0.0))
+        self.touching_of(
+            k,
+            points,
+            index.within_unsorted(&c, r + margin.max(0.0)),
+            margin,
+        )
+    }
+
+    /// [`Self::touching`] among `candidates` (the caller found them near the piece).
+    pub fn touching_of(
+        &self,
+        k: usize,
+        points: &[Point3<f64>],
+        candidates: impl IntoIterator<Item = usize>,
+        margin: f64,
+    ) -> Vec<(usize, f64)> {
+        let mut hint = 0;
+        candidates
+            .into_iter()
             .filter_map(|i| {
-                self.signed_distance_below(k, &points[i], margin)
+                self.signed_distance_below_hinted(k, &points[i], margin, &mut hint)
                     .map(|d| (i, d))
             })
             .collect()
+    }
+
+    /// A lower bound of a ball's, capsule's or cylinder's signed distance at `p` (a cylinder lies
+    /// inside the capsule on its axis), computed directly: most points a piece's bounding-sphere
+    /// query returns are far from it, and parry's projection onto a capsule costs more than this
+    /// test. None for other shapes.
+    fn round_distance_bound(&self, k: usize, p: &Point3<f64>) -> Option<f64> {
+        let (pose, shape, _) = self.piece(k);
+        let local = pose.inverse_transform_point(PVec::new(p.x, p.y, p.z));
+        let (a, b, r) = if let Some(ball) = shape.as_ball() {
+            (PVec::ZERO, PVec::ZERO, ball.radius)
+        } else if let Some(c) = shape.as_capsule() {
+            (c.segment.a, c.segment.b, c.radius)
+        } else if let Some(c) = shape.as_cylinder() {
+            let h = PVec::new(0.0, c.half_height, 0.0);
+            (-h, h, c.radius)
+        } else {
+            return None;
+        };
+        let ab = b - a;
+        let len2 = ab.length_squared();
+        let t = if len2 > 0.0 {
+            ((local - a).dot(ab) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        Some((local - (a + ab * t)).length() - r)
+    }
+
+    /// Whether any of `points` named by `candidates` (shifted by `offset`) is closer to piece `k`
+    /// than `margin` (the caller found the candidates near the shifted piece).
+    pub fn any_of(
+        &self,
+        k: usize,
+        points: &[Point3<f64>],
+        candidates: impl IntoIterator<Item = usize>,
+        margin: f64,
+        offset: &Vector3<f64>,
+    ) -> bool {
+        let mut hint = 0;
+        candidates.into_iter().any(|i| {
+            self.signed_distance_below_hinted(k, &(points[i] - offset), margin, &mut hint)
+                .is_some()
+        })
     }
 
     /// Whether any of `points` (shifted by `offset`) is closer to piece `k` than `margin`.
@@ -390,17 +486,14 @@ impl PosedCollision {
         offset: &Vector3<f64>,
     ) -> bool {
         let (c, r) = self.spheres[k];
-        index
-            .within_unsorted(&(c + offset), r + margin.max(0.0))
-            .any(|i| {
-                self.signed_distance_below(k, &(points[i] - offset), margin)
-                    .is_some()
-            })
+        let at = c + offset;
+        let near = index.within_unsorted(&at, r + margin.max(0.0));
+        self.any_of(k, points, near, margin, offset)
     }
 
     /// The body piece `k` belongs to.
     pub fn body_of(&self, k: usize) -> usize {
-        self.bodies[k]
+        self.hand.pieces[k].body
     }
 
     /// The bounding sphere of piece `k` in the world: centre and radius.
@@ -410,7 +503,7 @@ impl PosedCollision {
 
     /// Least signed distance of piece `k` to `plane`.
     pub fn piece_plane_clearance(&self, k: usize, plane: &Plane) -> f64 {
-        let (pose, shape) = &self.pieces[k];
+        let (pose, shape, _) = self.piece(k);
         let down = pv(&(-plane.normal));
         let p = match shape.as_support_map() {
             Some(s) => s.support_point(pose, down),
@@ -429,10 +522,10 @@ impl PosedCollision {
 
     /// Number of posed pieces.
     pub fn len(&self) -> usize {
-        self.pieces.len()
+        self.poses.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.pieces.is_empty()
+        self.poses.is_empty()
     }
 }

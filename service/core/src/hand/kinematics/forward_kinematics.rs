@@ -143,17 +143,42 @@ impl KinematicTree {
         if self.loop_closures.is_empty() && self.couplings.is_empty() {
             return Ok(0.0);
         }
+        self.project_constraints_fk(q, held).map(|(v, _)| v)
+    }
+
+    /// [`Self::project_constraints_holding`] for a model with constraints, with the forward
+    /// kinematics at the projected `q` (the last Newton step's when it converged: the closing
+    /// sweep poses the hand at every projected configuration).
+    pub fn project_constraints_fk(
+        &self,
+        q: &mut [f64],
+        held: &[usize],
+    ) -> Result<(f64, ForwardKinematics), FieldError> {
         let n = self.joints.len();
         let m = 3 * self.loop_closures.len() + self.couplings.len();
+        // Per loop closure and side, which joints move its anchor (the Jacobian's non-zero
+        // columns), found once rather than per Newton step.
+        let moves: Vec<[Vec<bool>; 2]> = self
+            .loop_closures
+            .iter()
+            .map(|lc| {
+                [lc.body1, lc.body2].map(|b| {
+                    (0..n)
+                        .map(|j| !held.contains(&j) && self.joint_moves(j, b))
+                        .collect()
+                })
+            })
+            .collect();
         for _ in 0..60 {
             let fk = self.forward(q)?;
             let r = self.constraint_residual(&fk, q);
-            if r.norm() < 1e-7 {
-                break;
+            let violation = r.norm();
+            if violation < 1e-7 {
+                return Ok((violation, fk));
             }
             let mut jac = nalgebra::DMatrix::zeros(m, n);
-            let point_col = |b: usize, p: &Point3<f64>, j: usize| -> Vector3<f64> {
-                if held.contains(&j) || !self.joint_moves(j, b) {
+            let point_col = |moving: &[bool], p: &Point3<f64>, j: usize| -> Vector3<f64> {
+                if !moving[j] {
                     return Vector3::zeros();
                 }
                 let (anchor, axis) = fk.joint_axes[j];
@@ -166,7 +191,7 @@ impl KinematicTree {
                 let p1 = fk.point(lc.body1, &lc.anchor1);
                 let p2 = fk.point(lc.body2, &lc.anchor2);
                 for j in 0..n {
-                    let col = point_col(lc.body1, &p1, j) - point_col(lc.body2, &p2, j);
+                    let col = point_col(&moves[k][0], &p1, j) - point_col(&moves[k][1], &p2, j);
                     jac.fixed_view_mut::<3, 1>(3 * k, j).copy_from(&col);
                 }
             }
@@ -190,6 +215,7 @@ impl KinematicTree {
                 *v = (*v + dq[j]).clamp(lo, hi);
             }
         }
-        self.constraint_violation(q)
+        let fk = self.forward(q)?;
+        Ok((self.constraint_residual(&fk, q).norm(), fk))
     }
 }

@@ -15,6 +15,7 @@
 
 pub mod closing;
 pub mod collision_model;
+pub mod convex_faces;
 pub mod describe;
 pub mod forward_kinematics;
 pub mod hand_model;

@@ -12,6 +12,7 @@
 //! up below it, the caller raises the hand.
 
 use super::ObjectView;
+use super::object_view::NearPoints;
 use crate::error::FieldError;
 use crate::hand::kinematics::{HandCollision, HandSynergy, KinematicHand, PosedCollision};
 use nalgebra::{Isometry3, Point3, Vector3};
@@ -90,13 +91,18 @@ pub struct SweepHand<'a> {
 }
 
 impl SweepHand<'_> {
-    fn posed(&self, q: &[f64]) -> Result<PosedCollision, FieldError> {
+    fn posed(&self, q: &[f64]) -> Result<PosedCollision<'_>, FieldError> {
         let fk = self.hand.tree.forward(q)?;
         Ok(self.collision.posed_fk(&fk, &self.root_in_world))
     }
 
-    /// Joints for per-finger, per-flexion-joint path parameters.
-    fn configure(&self, base: &[f64], s: &[(usize, Vec<f64>)]) -> Result<Vec<f64>, FieldError> {
+    /// Joints for per-finger, per-flexion-joint path parameters, and the hand posed there (a
+    /// linkage's projection ends with the forward kinematics of the joints it settles on).
+    fn configure_posed(
+        &self,
+        base: &[f64],
+        s: &[(usize, Vec<f64>)],
+    ) -> Result<(Vec<f64>, PosedCollision<'_>), FieldError> {
         let mut q = base.to_vec();
         let mut constrained = false;
         let mut held = Vec::new();
@@ -109,22 +115,31 @@ impl SweepHand<'_> {
             constrained |= fs.constrained;
         }
         self.hand.tree.clamp(&mut q);
-        if constrained {
-            self.hand.tree.project_constraints_holding(&mut q, &held)?;
+        let tree = &self.hand.tree;
+        if constrained && !(tree.loop_closures.is_empty() && tree.couplings.is_empty()) {
+            let (_, fk) = tree.project_constraints_fk(&mut q, &held)?;
+            let posed = self.collision.posed_fk(&fk, &self.root_in_world);
+            return Ok((q, posed));
         }
-        Ok(q)
+        let posed = self.posed(&q)?;
+        Ok((q, posed))
     }
 }
 
 /// Whether `link`'s pieces touch the object in `posed`.
-fn link_touches(posed: &PosedCollision, pieces: &[usize], object: &ObjectView) -> bool {
+fn link_touches(
+    posed: &PosedCollision,
+    pieces: &[usize],
+    object: &ObjectView,
+    near: &mut NearPoints,
+) -> bool {
     pieces.iter().any(|&k| {
         let (c, r) = posed.sphere(k);
         object.near(&c, r + TOUCH_MARGIN)
-            && posed.any_within(
+            && posed.any_of(
                 k,
                 &object.points,
-                &object.index,
+                near.within(k, object, &c, r + TOUCH_MARGIN),
                 TOUCH_MARGIN,
                 &Vector3::zeros(),
             )
@@ -173,6 +188,7 @@ pub fn close_fingers(
         .collect();
     let mut linked_touch: Vec<Option<f64>> = vec![None; fingers.len()];
     let ds = 1.0 / STEPS as f64;
+    let mut near = NearPoints::default();
     for _ in 0..(2 * STEPS) {
         if active.iter().all(|a| a.iter().all(|x| !x)) {
             break;
@@ -192,8 +208,7 @@ pub fn close_fingers(
                 .collect::<Vec<_>>()
         };
         let next = advance(&s, &active, ds);
-        let q = h.configure(base, &next)?;
-        let posed = h.posed(&q)?;
+        let (_, posed) = h.configure_posed(base, &next)?;
         // Which still-moving links touch now.
         let mut hit = false;
         for (i, ls) in links.iter().enumerate() {
@@ -201,7 +216,7 @@ pub fn close_fingers(
                 if stopped_links[i][l] || !movers[i][l].iter().any(|&k| active[i][k]) {
                     continue;
                 }
-                hit |= link_touches(&posed, pieces, object);
+                hit |= link_touches(&posed, pieces, object, &mut near);
             }
         }
         if !hit {
@@ -220,22 +235,20 @@ pub fn close_fingers(
         let (mut lo, mut hi) = (0.0, ds);
         for _ in 0..BISECTIONS {
             let mid = 0.5 * (lo + hi);
-            let q = h.configure(base, &advance(&s, &active, mid))?;
-            let posed = h.posed(&q)?;
+            let (_, posed) = h.configure_posed(base, &advance(&s, &active, mid))?;
             let mut any = false;
             for (i, ls) in links.iter().enumerate() {
                 for (l, (_, pieces)) in ls.iter().enumerate() {
                     if stopped_links[i][l] || !movers[i][l].iter().any(|&k| active[i][k]) {
                         continue;
                     }
-                    any |= link_touches(&posed, pieces, object);
+                    any |= link_touches(&posed, pieces, object, &mut near);
                 }
             }
             if any { hi = mid } else { lo = mid }
         }
         let touch = advance(&s, &active, hi);
-        let q = h.configure(base, &touch)?;
-        let posed = h.posed(&q)?;
+        let (_, posed) = h.configure_posed(base, &touch)?;
         s = advance(&s, &active, lo);
         // Stop the joints moving each link that touches at `hi`.
         for (i, ls) in links.iter().enumerate() {
@@ -243,7 +256,7 @@ pub fn close_fingers(
                 if stopped_links[i][l] || !movers[i][l].iter().any(|&k| active[i][k]) {
                     continue;
                 }
-                if !link_touches(&posed, pieces, object) {
+                if !link_touches(&posed, pieces, object, &mut near) {
                     continue;
                 }
                 stopped_links[i][l] = true;
@@ -270,12 +283,11 @@ pub fn close_fingers(
             }
         }
     }
-    let joints = h.configure(base, &s)?;
-    let posed = h.posed(&joints)?;
+    let (joints, posed) = h.configure_posed(base, &s)?;
     let mut contacts = Vec::new();
     for (i, ls) in links.iter().enumerate() {
         for (b, pieces) in ls {
-            if let Some(c) = patch(&posed, pieces, object, *b, Some(fingers[i])) {
+            if let Some(c) = patch(&posed, pieces, object, *b, Some(fingers[i]), &mut near) {
                 contacts.push(c);
             }
         }
@@ -331,13 +343,14 @@ fn neighbourhood_coherence(object: &ObjectView, position: &Point3<f64>) -> Optio
 }
 
 /// The contact patch of `body`'s pieces: the object points within [`PATCH_MARGIN`], their mean
-/// position and normal, and the nearest point.
+/// position and normal, and the nearest point (`near`: the sweep's points about each piece).
 pub fn patch(
     posed: &PosedCollision,
     pieces: &[usize],
     object: &ObjectView,
     body: usize,
     finger: Option<usize>,
+    near: &mut NearPoints,
 ) -> Option<SweepContact> {
     let mut pts: Vec<(usize, f64)> = Vec::new();
     for &k in pieces {
@@ -345,7 +358,8 @@ pub fn patch(
         if !object.near(&c, r + PATCH_MARGIN) {
             continue;
         }
-        for (i, d) in posed.touching(k, &object.points, &object.index, PATCH_MARGIN) {
+        let within = near.within(k, object, &c, r + PATCH_MARGIN);
+        for (i, d) in posed.touching_of(k, &object.points, within, PATCH_MARGIN) {
             match pts.iter_mut().find(|(j, _)| *j == i) {
                 Some(e) => e.1 = e.1.min(d),
                 None => pts.push((i, d)),
@@ -503,7 +517,15 @@ mod tests {
                 Some(normals),
             );
             let object = ObjectView::new(&points, &lazy, None);
-            let p = patch(&posed, &pieces, &object, tip_body, Some(0)).expect("touches");
+            let p = patch(
+                &posed,
+                &pieces,
+                &object,
+                tip_body,
+                Some(0),
+                &mut NearPoints::default(),
+            )
+            .expect("touches");
             let (_, patch_alone) = mean_normal(
                 posed
                     .touching(pieces[0], &object.points, &object.index, PATCH_MARGIN)

@@ -3,6 +3,7 @@
 
 use super::ObjectView;
 use super::closing_sweep::{SweepContact, SweepHand, patch};
+use super::object_view::NearPoints;
 use crate::error::FieldError;
 use crate::planning::kinematic_model::KinematicModel;
 
@@ -86,7 +87,7 @@ pub(super) fn palm_contacts(
         let pieces: Vec<usize> = (0..model.collision.pieces.len())
             .filter(|&k| model.collision.pieces[k].body == b)
             .collect();
-        if let Some(c) = patch(&posed, &pieces, object, b, None) {
+        if let Some(c) = patch(&posed, &pieces, object, b, None, &mut NearPoints::default()) {
             out.push(c);
         }
     }
