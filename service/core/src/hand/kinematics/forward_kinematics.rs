@@ -29,6 +29,31 @@ impl KinematicTree {
     /// Forward kinematics for the joint vector `q` (one value per joint, in `joints` order;
     /// radians for hinges, metres for slides). Values outside the limits are used as given.
     pub fn forward(&self, q: &[f64]) -> Result<ForwardKinematics, FieldError> {
+        self.forward_below(q, None)
+    }
+
+    /// [`Self::forward`] at `q` when `base` is the forward kinematics at `q` but for joint
+    /// `changed`: only the bodies it moves are posed again, the rest copied — the very values a
+    /// full pass gives (a finite-difference Jacobian perturbs one joint at a time).
+    pub fn forward_changed(
+        &self,
+        q: &[f64],
+        base: &ForwardKinematics,
+        changed: usize,
+    ) -> Result<ForwardKinematics, FieldError> {
+        if base.body_poses.len() != self.bodies.len() || changed >= self.joints.len() {
+            return self.forward(q);
+        }
+        self.forward_below(q, Some((base, self.joints[changed].body)))
+    }
+
+    /// Forward kinematics; with `Some((base, body))`, the bodies other than `body` and those
+    /// below it are taken from `base`.
+    fn forward_below(
+        &self,
+        q: &[f64],
+        reuse: Option<(&ForwardKinematics, usize)>,
+    ) -> Result<ForwardKinematics, FieldError> {
         if q.len() != self.joints.len() {
             return Err(FieldError::new(
                 "joints",
@@ -47,8 +72,20 @@ impl KinematicTree {
             ));
         }
         let mut body_poses = Vec::with_capacity(self.bodies.len());
-        let mut joint_axes = vec![(Point3::origin(), Vector3::z_axis()); self.joints.len()];
-        for b in &self.bodies {
+        let mut joint_axes = match reuse {
+            Some((base, _)) => base.joint_axes.clone(),
+            None => vec![(Point3::origin(), Vector3::z_axis()); self.joints.len()],
+        };
+        // Per body, whether it is posed again (below the changed joint's body).
+        let mut moved = vec![reuse.is_none(); self.bodies.len()];
+        for (i, b) in self.bodies.iter().enumerate() {
+            if let Some((base, changed)) = reuse {
+                moved[i] = i == changed || b.parent.is_some_and(|p| moved[p]);
+                if !moved[i] {
+                    body_poses.push(base.body_poses[i]);
+                    continue;
+                }
+            }
             let mut t = match b.parent {
                 Some(p) => body_poses[p] * b.pose,
                 None => b.pose,

@@ -221,7 +221,7 @@ fn unlimited_squeeze(
                 .max(0.0);
                 let mut qh = q.clone();
                 qh[fj.joint] += dir * H;
-                let fk1 = hand.tree.forward(&qh)?;
+                let fk1 = hand.tree.forward_changed(&qh, &fk, fj.joint)?;
                 let along: Vec<f64> = mine
                     .iter()
                     .map(|(b, local, _, inward)| {
@@ -364,7 +364,7 @@ fn balanced_squeeze(
         for fj in &syn.fingers[*f].flexion {
             let mut qh = q0.clone();
             qh[fj.joint] += H;
-            let fk1 = hand.tree.forward(&qh)?;
+            let fk1 = hand.tree.forward_changed(&qh, &fk0, fj.joint)?;
             let v: Vec<ContactMotion> = mine
                 .iter()
                 .map(|&i| {
