@@ -152,8 +152,9 @@ fn hand(file: &str) -> KinematicHand {
 /// The description derived from each shared hand validates, has the hand's finger count, marks
 /// the real thumb, and measures a plausible aperture (the Robotiq 2F-85's stroke is 85 mm; the
 /// pad centres sit 4 mm behind the pad surfaces).
-/// Forward kinematics with one joint changed from an earlier pass equals a full pass bit for bit,
-/// for every joint of every shared hand (the squeeze's finite differences rely on it).
+/// Forward kinematics with one or two joints changed from an earlier pass equals a full pass bit
+/// for bit, for every joint of every shared hand (the squeeze's finite differences and the
+/// closing sweep rely on it).
 #[test]
 fn forward_with_one_joint_changed_equals_a_full_pass() {
     for file in [
@@ -172,6 +173,12 @@ fn forward_with_one_joint_changed_equals_a_full_pass() {
             let changed = tree.forward_changed(&qh, &base, j).unwrap();
             assert_eq!(full.body_poses, changed.body_poses, "{file}: joint {j}");
             assert_eq!(full.joint_axes, changed.joint_axes, "{file}: joint {j}");
+            // With the next joint changed too (two fingers closing at once).
+            let k = (j + 1) % tree.joints.len();
+            qh[k] -= 0.02;
+            let full2 = tree.forward(&qh).unwrap();
+            let from = tree.forward_from(&qh, &base, &[j, k]).unwrap();
+            assert_eq!(full2.body_poses, from.body_poses, "{file}: joints {j}, {k}");
             // A joint's change moves its own body.
             let b = tree.joints[j].body;
             if tree.joints[j].kind == JointKind::Hinge {

@@ -41,18 +41,35 @@ impl KinematicTree {
         base: &ForwardKinematics,
         changed: usize,
     ) -> Result<ForwardKinematics, FieldError> {
-        if base.body_poses.len() != self.bodies.len() || changed >= self.joints.len() {
-            return self.forward(q);
-        }
-        self.forward_below(q, Some((base, self.joints[changed].body)))
+        self.forward_from(q, base, std::slice::from_ref(&changed))
     }
 
-    /// Forward kinematics; with `Some((base, body))`, the bodies other than `body` and those
-    /// below it are taken from `base`.
+    /// [`Self::forward_changed`] for several changed joints (the closing sweep moves only the
+    /// fingers that take part).
+    pub fn forward_from(
+        &self,
+        q: &[f64],
+        base: &ForwardKinematics,
+        changed: &[usize],
+    ) -> Result<ForwardKinematics, FieldError> {
+        if base.body_poses.len() != self.bodies.len()
+            || changed.iter().any(|&j| j >= self.joints.len())
+        {
+            return self.forward(q);
+        }
+        let mut own = vec![false; self.bodies.len()];
+        for &j in changed {
+            own[self.joints[j].body] = true;
+        }
+        self.forward_below(q, Some((base, &own)))
+    }
+
+    /// Forward kinematics; with `Some((base, own))`, only the bodies marked in `own` and those
+    /// below them are posed, the others taken from `base`.
     fn forward_below(
         &self,
         q: &[f64],
-        reuse: Option<(&ForwardKinematics, usize)>,
+        reuse: Option<(&ForwardKinematics, &[bool])>,
     ) -> Result<ForwardKinematics, FieldError> {
         if q.len() != self.joints.len() {
             return Err(FieldError::new(
@@ -79,8 +96,8 @@ impl KinematicTree {
         // Per body, whether it is posed again (below the changed joint's body).
         let mut moved = vec![reuse.is_none(); self.bodies.len()];
         for (i, b) in self.bodies.iter().enumerate() {
-            if let Some((base, changed)) = reuse {
-                moved[i] = i == changed || b.parent.is_some_and(|p| moved[p]);
+            if let Some((base, own)) = reuse {
+                moved[i] = own[i] || b.parent.is_some_and(|p| moved[p]);
                 if !moved[i] {
                     body_poses.push(base.body_poses[i]);
                     continue;

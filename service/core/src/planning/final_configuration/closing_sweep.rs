@@ -14,7 +14,9 @@
 use super::ObjectView;
 use super::object_view::NearPoints;
 use crate::error::FieldError;
-use crate::hand::kinematics::{HandCollision, HandSynergy, KinematicHand, PosedCollision};
+use crate::hand::kinematics::{
+    ForwardKinematics, HandCollision, HandSynergy, KinematicHand, PosedCollision,
+};
 use nalgebra::{Isometry3, Point3, Vector3};
 
 /// Steps along the whole closing path.
@@ -91,8 +93,18 @@ pub struct SweepHand<'a> {
 }
 
 impl SweepHand<'_> {
-    fn posed(&self, q: &[f64]) -> Result<PosedCollision<'_>, FieldError> {
-        let fk = self.hand.tree.forward(q)?;
+    /// The hand posed at `q`, its forward kinematics from `at_base`'s (those at `base`) for the
+    /// joints that differ from `base`: the fingers that do not close keep their bodies' poses.
+    fn posed(
+        &self,
+        q: &[f64],
+        base: &[f64],
+        at_base: &ForwardKinematics,
+    ) -> Result<PosedCollision<'_>, FieldError> {
+        let changed: Vec<usize> = (0..q.len())
+            .filter(|&j| q[j].to_bits() != base[j].to_bits())
+            .collect();
+        let fk = self.hand.tree.forward_from(q, at_base, &changed)?;
         Ok(self.collision.posed_fk(&fk, &self.root_in_world))
     }
 
@@ -101,6 +113,7 @@ impl SweepHand<'_> {
     fn configure_posed(
         &self,
         base: &[f64],
+        at_base: &ForwardKinematics,
         s: &[(usize, Vec<f64>)],
     ) -> Result<(Vec<f64>, PosedCollision<'_>), FieldError> {
         let mut q = base.to_vec();
@@ -121,7 +134,7 @@ impl SweepHand<'_> {
             let posed = self.collision.posed_fk(&fk, &self.root_in_world);
             return Ok((q, posed));
         }
-        let posed = self.posed(&q)?;
+        let posed = self.posed(&q, base, at_base)?;
         Ok((q, posed))
     }
 }
@@ -189,6 +202,7 @@ pub fn close_fingers(
     let mut linked_touch: Vec<Option<f64>> = vec![None; fingers.len()];
     let ds = 1.0 / STEPS as f64;
     let mut near = NearPoints::default();
+    let at_base = h.hand.tree.forward(base)?;
     for _ in 0..(2 * STEPS) {
         if active.iter().all(|a| a.iter().all(|x| !x)) {
             break;
@@ -208,7 +222,7 @@ pub fn close_fingers(
                 .collect::<Vec<_>>()
         };
         let next = advance(&s, &active, ds);
-        let (_, posed) = h.configure_posed(base, &next)?;
+        let (_, posed) = h.configure_posed(base, &at_base, &next)?;
         // Which still-moving links touch now.
         let mut hit = false;
         for (i, ls) in links.iter().enumerate() {
@@ -235,7 +249,7 @@ pub fn close_fingers(
         let (mut lo, mut hi) = (0.0, ds);
         for _ in 0..BISECTIONS {
             let mid = 0.5 * (lo + hi);
-            let (_, posed) = h.configure_posed(base, &advance(&s, &active, mid))?;
+            let (_, posed) = h.configure_posed(base, &at_base, &advance(&s, &active, mid))?;
             let mut any = false;
             for (i, ls) in links.iter().enumerate() {
                 for (l, (_, pieces)) in ls.iter().enumerate() {
@@ -248,7 +262,7 @@ pub fn close_fingers(
             if any { hi = mid } else { lo = mid }
         }
         let touch = advance(&s, &active, hi);
-        let (_, posed) = h.configure_posed(base, &touch)?;
+        let (_, posed) = h.configure_posed(base, &at_base, &touch)?;
         s = advance(&s, &active, lo);
         // Stop the joints moving each link that touches at `hi`.
         for (i, ls) in links.iter().enumerate() {
@@ -283,7 +297,7 @@ pub fn close_fingers(
             }
         }
     }
-    let (joints, posed) = h.configure_posed(base, &s)?;
+    let (joints, posed) = h.configure_posed(base, &at_base, &s)?;
     let mut contacts = Vec::new();
     for (i, ls) in links.iter().enumerate() {
         for (b, pieces) in ls {
