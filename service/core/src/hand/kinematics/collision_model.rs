@@ -56,7 +56,13 @@ pub struct CollisionPiece {
     /// Bounding sphere in the body frame: centre and radius.
     pub centre: Point3<f64>,
     pub radius: f64,
+    /// For a ball, capsule or cylinder: the ends of its axis in the body frame and its radius.
+    pub axis: Option<RoundAxis>,
 }
+
+/// The ends of a round piece's axis and its radius (a ball's ends are its centre; a cylinder
+/// lies inside the capsule on its axis).
+pub type RoundAxis = (Point3<f64>, Point3<f64>, f64);
 
 /// Face planes (outward unit normal, offset) of a convex piece.
 pub type FacePlanes = Arc<ConvexFaces>;
@@ -122,6 +128,8 @@ pub struct PosedCollision<'h> {
     poses: Vec<Pose3>,
     /// Bounding sphere of each piece in the world: centre and radius.
     spheres: Vec<(Point3<f64>, f64)>,
+    /// A round piece's axis ends in the world and its radius ([`CollisionPiece::axis`]).
+    axes: Vec<Option<RoundAxis>>,
 }
 
 impl KinematicHand {
@@ -212,10 +220,25 @@ impl KinematicHand {
                 } else {
                     0.5 * (hi - lo).length()
                 };
+                let ends = |a: PVec, b: PVec, r: f64| {
+                    let p = |v: PVec| pose * Point3::new(v.x, v.y, v.z);
+                    Some((p(a), p(b), r))
+                };
+                let axis = if let Some(ball) = shape.as_ball() {
+                    ends(PVec::ZERO, PVec::ZERO, ball.radius)
+                } else if let Some(c) = shape.as_capsule() {
+                    ends(c.segment.a, c.segment.b, c.radius)
+                } else if let Some(c) = shape.as_cylinder() {
+                    let h = PVec::new(0.0, c.half_height, 0.0);
+                    ends(-h, h, c.radius)
+                } else {
+                    None
+                };
                 pieces.push(CollisionPiece {
                     body: b,
                     centre: pose * local_centre,
                     radius,
+                    axis,
                     pose,
                     faces: face_planes(&shape),
                     shape,
@@ -282,15 +305,18 @@ impl HandCollision {
     ) -> PosedCollision<'_> {
         let mut poses = Vec::with_capacity(self.pieces.len());
         let mut spheres = Vec::with_capacity(self.pieces.len());
+        let mut axes = Vec::with_capacity(self.pieces.len());
         for p in &self.pieces {
             let body = root_in_world * fk.body_poses[p.body];
             poses.push(pose3(&(body * p.pose)));
             spheres.push((body * p.centre, p.radius));
+            axes.push(p.axis.map(|(a, b, r)| (body * a, body * b, r)));
         }
         PosedCollision {
             hand: self,
             poses,
             spheres,
+            axes,
         }
     }
 }
@@ -433,30 +459,19 @@ impl PosedCollision<'_> {
     }
 
     /// A lower bound of a ball's, capsule's or cylinder's signed distance at `p` (a cylinder lies
-    /// inside the capsule on its axis), computed directly: most points a piece's bounding-sphere
-    /// query returns are far from it, and parry's projection onto a capsule costs more than this
-    /// test. None for other shapes.
+    /// inside the capsule on its axis), computed directly from the axis posed in the world: most
+    /// points a piece's bounding-sphere query returns are far from it, and parry's projection onto
+    /// a capsule costs more than this test. None for other shapes.
     fn round_distance_bound(&self, k: usize, p: &Point3<f64>) -> Option<f64> {
-        let (pose, shape, _) = self.piece(k);
-        let local = pose.inverse_transform_point(PVec::new(p.x, p.y, p.z));
-        let (a, b, r) = if let Some(ball) = shape.as_ball() {
-            (PVec::ZERO, PVec::ZERO, ball.radius)
-        } else if let Some(c) = shape.as_capsule() {
-            (c.segment.a, c.segment.b, c.radius)
-        } else if let Some(c) = shape.as_cylinder() {
-            let h = PVec::new(0.0, c.half_height, 0.0);
-            (-h, h, c.radius)
-        } else {
-            return None;
-        };
+        let (a, b, r) = self.axes[k]?;
         let ab = b - a;
-        let len2 = ab.length_squared();
+        let len2 = ab.norm_squared();
         let t = if len2 > 0.0 {
-            ((local - a).dot(ab) / len2).clamp(0.0, 1.0)
+            ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
         } else {
             0.0
         };
-        Some((local - (a + ab * t)).length() - r)
+        Some((p - (a + ab * t)).norm() - r)
     }
 
     /// Whether any of `points` named by `candidates` (shifted by `offset`) is closer to piece `k`
