@@ -23,6 +23,7 @@ use crate::error::FieldError;
 use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 use parry3d_f64::math::{Pose3, Rot3, Vector as PVec};
 use parry3d_f64::shape::SharedShape;
+use std::cell::OnceCell;
 use std::sync::Arc;
 
 /// How far past a margin [`PosedCollision::round_distance_bound`] must be to decide without
@@ -119,17 +120,26 @@ pub struct HandCollision {
     pub pieces: Vec<CollisionPiece>,
 }
 
-/// The pieces posed in the world for one configuration and hand pose (the shapes are the
-/// hand's own, borrowed: the closing sweep poses the hand hundreds of times per candidate).
+/// The pieces posed in the world for one configuration and hand pose. The shapes are the hand's
+/// own, borrowed, and each piece is posed when first asked for: the closing sweep poses the hand
+/// hundreds of times per candidate and tests only the moving fingers' pieces.
 #[derive(Debug, Clone)]
 pub struct PosedCollision<'h> {
     hand: &'h HandCollision,
-    /// Pose of each piece's shape in the world.
-    poses: Vec<Pose3>,
-    /// Bounding sphere of each piece in the world: centre and radius.
-    spheres: Vec<(Point3<f64>, f64)>,
-    /// A round piece's axis ends in the world and its radius ([`CollisionPiece::axis`]).
-    axes: Vec<Option<RoundAxis>>,
+    /// Each body's pose in the world.
+    bodies: Vec<Isometry3<f64>>,
+    pieces: Vec<OnceCell<PosedPiece>>,
+}
+
+/// One piece posed in the world.
+#[derive(Debug, Clone)]
+struct PosedPiece {
+    /// Pose of the shape.
+    pose: Pose3,
+    /// Bounding sphere: centre and radius.
+    sphere: (Point3<f64>, f64),
+    /// A round piece's axis ends and its radius ([`CollisionPiece::axis`]).
+    axis: Option<RoundAxis>,
 }
 
 impl KinematicHand {
@@ -303,42 +313,45 @@ impl HandCollision {
         fk: &super::ForwardKinematics,
         root_in_world: &Isometry3<f64>,
     ) -> PosedCollision<'_> {
-        let mut poses = Vec::with_capacity(self.pieces.len());
-        let mut spheres = Vec::with_capacity(self.pieces.len());
-        let mut axes = Vec::with_capacity(self.pieces.len());
-        for p in &self.pieces {
-            let body = root_in_world * fk.body_poses[p.body];
-            poses.push(pose3(&(body * p.pose)));
-            spheres.push((body * p.centre, p.radius));
-            axes.push(p.axis.map(|(a, b, r)| (body * a, body * b, r)));
-        }
         PosedCollision {
             hand: self,
-            poses,
-            spheres,
-            axes,
+            bodies: fk.body_poses.iter().map(|b| root_in_world * b).collect(),
+            pieces: vec![OnceCell::new(); self.pieces.len()],
         }
     }
 }
 
 impl PosedCollision<'_> {
+    /// Piece `k` posed in the world.
+    fn posed(&self, k: usize) -> &PosedPiece {
+        self.pieces[k].get_or_init(|| {
+            let p = &self.hand.pieces[k];
+            let body = &self.bodies[p.body];
+            PosedPiece {
+                pose: pose3(&(body * p.pose)),
+                sphere: (body * p.centre, p.radius),
+                axis: p.axis.map(|(a, b, r)| (body * a, body * b, r)),
+            }
+        })
+    }
+
     /// Piece `k`'s pose in the world, its shape and its face planes.
     fn piece(&self, k: usize) -> (&Pose3, &SharedShape, Option<&ConvexFaces>) {
         let p = &self.hand.pieces[k];
-        (&self.poses[k], &p.shape, p.faces.as_deref())
+        (&self.posed(k).pose, &p.shape, p.faces.as_deref())
     }
 
     /// Least signed distance of the hand geometry to `plane` (negative: through it), from each
     /// piece's support point against the plane normal.
     pub fn plane_clearance(&self, plane: &Plane) -> f64 {
-        (0..self.poses.len())
+        (0..self.pieces.len())
             .map(|k| self.piece_plane_clearance(k, plane))
             .fold(f64::INFINITY, f64::min)
     }
 
     /// Number of `points` deeper than `tolerance` inside any piece, counting at most `limit`.
     pub fn points_inside(&self, points: &[Point3<f64>], tolerance: f64, limit: usize) -> usize {
-        let boxes: Vec<_> = (0..self.poses.len())
+        let boxes: Vec<_> = (0..self.pieces.len())
             .map(|k| {
                 let (pose, shape, _) = self.piece(k);
                 shape.compute_aabb(pose)
@@ -388,7 +401,7 @@ impl PosedCollision<'_> {
         let d = (proj.point - v).length();
         if d.is_nan() {
             // parry cannot project a ball's or capsule's exact centre: the deepest point.
-            return -self.spheres[k].1;
+            return -self.posed(k).sphere.1;
         }
         if proj.is_inside { -d } else { d }
     }
@@ -431,7 +444,7 @@ impl PosedCollision<'_> {
         index: &crate::cloud::CloudIndex,
         margin: f64,
     ) -> Vec<(usize, f64)> {
-        let (c, r) = self.spheres[k];
+        let (c, r) = self.posed(k).sphere;
         self.touching_of(
             k,
             points,
@@ -463,7 +476,7 @@ impl PosedCollision<'_> {
     /// points a piece's bounding-sphere query returns are far from it, and parry's projection onto
     /// a capsule costs more than this test. None for other shapes.
     fn round_distance_bound(&self, k: usize, p: &Point3<f64>) -> Option<f64> {
-        let (a, b, r) = self.axes[k]?;
+        let (a, b, r) = self.posed(k).axis?;
         let ab = b - a;
         let len2 = ab.norm_squared();
         let t = if len2 > 0.0 {
@@ -500,7 +513,7 @@ impl PosedCollision<'_> {
         margin: f64,
         offset: &Vector3<f64>,
     ) -> bool {
-        let (c, r) = self.spheres[k];
+        let (c, r) = self.posed(k).sphere;
         let at = c + offset;
         let near = index.within_unsorted(&at, r + margin.max(0.0));
         self.any_of(k, points, near, margin, offset)
@@ -513,7 +526,7 @@ impl PosedCollision<'_> {
 
     /// The bounding sphere of piece `k` in the world: centre and radius.
     pub fn sphere(&self, k: usize) -> (Point3<f64>, f64) {
-        self.spheres[k]
+        self.posed(k).sphere
     }
 
     /// Least signed distance of piece `k` to `plane`.
@@ -537,10 +550,10 @@ impl PosedCollision<'_> {
 
     /// Number of posed pieces.
     pub fn len(&self) -> usize {
-        self.poses.len()
+        self.pieces.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.poses.is_empty()
+        self.pieces.is_empty()
     }
 }
