@@ -217,32 +217,26 @@ impl KinematicHand {
                     0.5 * (lo.y + hi.y),
                     0.5 * (lo.z + hi.z),
                 );
-                // A round piece's own bounding sphere (its bounds' corners lie outside it: a
-                // capsule's by a tenth of its radius, the ball each touch test queries the
-                // cloud with); a polyhedron's stays its bounds' (its face-plane distance reaches
-                // past its corners).
-                let radius = if let Some(ball) = shape.as_ball() {
-                    ball.radius
-                } else if let Some(c) = shape.as_capsule() {
-                    c.half_height() + c.radius
-                } else if let Some(c) = shape.as_cylinder() {
-                    c.half_height.hypot(c.radius)
-                } else {
-                    0.5 * (hi - lo).length()
-                };
+                // A round piece's axis, and its own bounding sphere (its bounds' corners lie
+                // outside it: a capsule's by a tenth of its radius, the ball each touch test
+                // queries the cloud with); a polyhedron's stays its bounds' (its face-plane
+                // distance reaches past its corners).
                 let ends = |a: PVec, b: PVec, r: f64| {
                     let p = |v: PVec| pose * Point3::new(v.x, v.y, v.z);
                     Some((p(a), p(b), r))
                 };
-                let axis = if let Some(ball) = shape.as_ball() {
-                    ends(PVec::ZERO, PVec::ZERO, ball.radius)
+                let (axis, radius) = if let Some(ball) = shape.as_ball() {
+                    (ends(PVec::ZERO, PVec::ZERO, ball.radius), ball.radius)
                 } else if let Some(c) = shape.as_capsule() {
-                    ends(c.segment.a, c.segment.b, c.radius)
+                    (
+                        ends(c.segment.a, c.segment.b, c.radius),
+                        c.half_height() + c.radius,
+                    )
                 } else if let Some(c) = shape.as_cylinder() {
                     let h = PVec::new(0.0, c.half_height, 0.0);
-                    ends(-h, h, c.radius)
+                    (ends(-h, h, c.radius), c.half_height.hypot(c.radius))
                 } else {
-                    None
+                    (None, 0.5 * (hi - lo).length())
                 };
                 pieces.push(CollisionPiece {
                     body: b,
@@ -461,14 +455,25 @@ impl PosedCollision<'_> {
         candidates: impl IntoIterator<Item = usize>,
         margin: f64,
     ) -> Vec<(usize, f64)> {
-        let mut hint = 0;
-        candidates
-            .into_iter()
-            .filter_map(|i| {
-                self.signed_distance_below_hinted(k, &points[i], margin, &mut hint)
-                    .map(|d| (i, d))
-            })
+        self.below_among(k, points, candidates, margin, &Vector3::zeros())
             .collect()
+    }
+
+    /// The `candidates` of `points` (shifted by `offset`) closer to piece `k` than `margin`, with
+    /// their signed distances, lazily; the queries share a polyhedron's face hint.
+    fn below_among<'a>(
+        &'a self,
+        k: usize,
+        points: &'a [Point3<f64>],
+        candidates: impl IntoIterator<Item = usize> + 'a,
+        margin: f64,
+        offset: &'a Vector3<f64>,
+    ) -> impl Iterator<Item = (usize, f64)> + 'a {
+        let mut hint = 0;
+        candidates.into_iter().filter_map(move |i| {
+            self.signed_distance_below_hinted(k, &(points[i] - offset), margin, &mut hint)
+                .map(|d| (i, d))
+        })
     }
 
     /// A lower bound of a ball's, capsule's or cylinder's signed distance at `p` (a cylinder lies
@@ -497,11 +502,9 @@ impl PosedCollision<'_> {
         margin: f64,
         offset: &Vector3<f64>,
     ) -> bool {
-        let mut hint = 0;
-        candidates.into_iter().any(|i| {
-            self.signed_distance_below_hinted(k, &(points[i] - offset), margin, &mut hint)
-                .is_some()
-        })
+        self.below_among(k, points, candidates, margin, offset)
+            .next()
+            .is_some()
     }
 
     /// Whether any of `points` (shifted by `offset`) is closer to piece `k` than `margin`.

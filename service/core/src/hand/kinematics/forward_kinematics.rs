@@ -93,8 +93,15 @@ impl KinematicTree {
             Some((base, _)) => base.joint_axes.clone(),
             None => vec![(Point3::origin(), Vector3::z_axis()); self.joints.len()],
         };
-        // Per body, whether it is posed again (below the changed joint's body).
-        let mut moved = vec![reuse.is_none(); self.bodies.len()];
+        // Per body, whether it is posed again (below a changed joint's body); only with `reuse`.
+        let mut moved = vec![
+            false;
+            if reuse.is_some() {
+                self.bodies.len()
+            } else {
+                0
+            }
+        ];
         for (i, b) in self.bodies.iter().enumerate() {
             if let Some((base, own)) = reuse {
                 moved[i] = own[i] || b.parent.is_some_and(|p| moved[p]);
