@@ -382,6 +382,39 @@ fn robotiq_linkage_is_one_finger_per_side() {
     );
 }
 
+/// The 2F-85's drivers held anywhere in their range, the rest of the linkage projected from
+/// the open hand: the closures hold to 0.1 µm, the drivers stay where they were held and every
+/// joint inside its limits — also where a passive joint rests on a limit on the way (closed).
+#[test]
+fn robotiq_linkage_follows_its_drivers_across_the_range() {
+    let h = hand(SHARED_HANDS[2].0);
+    let joint = |name: &str| h.tree.joints.iter().position(|j| j.name == name).unwrap();
+    let drivers = [joint("right_driver_joint"), joint("left_driver_joint")];
+    for k in 0..=8 {
+        let v = 0.1 * k as f64;
+        let mut q = h.tree.home_configuration();
+        for &d in &drivers {
+            q[d] = v;
+        }
+        let violation = h
+            .tree
+            .project_constraints_holding(&mut q, &drivers)
+            .unwrap();
+        assert!(violation < 1e-7, "driver at {v}: violation {violation:e}");
+        for &d in &drivers {
+            assert_eq!(q[d], v);
+        }
+        for (j, x) in h.tree.joints.iter().zip(&q) {
+            let (lo, hi) = j.limits();
+            assert!(
+                (lo..=hi).contains(x),
+                "{} = {x} outside [{lo}, {hi}]",
+                j.name
+            );
+        }
+    }
+}
+
 /// Names given by the caller win over the detection rules.
 #[test]
 fn overrides_pick_palm_fingers_and_thumb() {

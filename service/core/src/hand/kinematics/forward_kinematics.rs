@@ -9,6 +9,12 @@ use super::kinematic_tree::{JointKind, KinematicTree};
 use crate::error::FieldError;
 use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 
+/// A projection step that leaves more than this fraction of the least violation so far makes
+/// no progress.
+const STALL: f64 = 0.98;
+/// The projection gives up after this many such steps in a row.
+const STALLED_STEPS: usize = 3;
+
 /// The result of forward kinematics, in the tree's root frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ForwardKinematics {
@@ -230,12 +236,23 @@ impl KinematicTree {
                 })
             })
             .collect();
+        let (mut best, mut stalled) = (f64::INFINITY, 0);
         for _ in 0..60 {
             let fk = self.forward(q)?;
             let r = self.constraint_residual(&fk, q);
             let violation = r.norm();
             if violation < 1e-7 {
                 return Ok((violation, fk));
+            }
+            // Steps that no longer reduce the violation: the constraints cannot be met inside
+            // the limits from here (a driven joint past what the linkage reaches).
+            if violation > STALL * best {
+                stalled += 1;
+                if stalled == STALLED_STEPS {
+                    return Ok((violation, fk));
+                }
+            } else {
+                (best, stalled) = (violation, 0);
             }
             let mut jac = nalgebra::DMatrix::zeros(m, n);
             let point_col = |moving: &[bool], p: &Point3<f64>, j: usize| -> Vector3<f64> {
@@ -268,9 +285,28 @@ impl KinematicTree {
                     jac[(base + k, c.joint2)] -= slope;
                 }
             }
-            let a = &jac * jac.transpose() + nalgebra::DMatrix::identity(m, m) * 1e-8;
-            let Some(w) = a.lu().solve(&r) else { break };
-            let dq = -(jac.transpose() * w);
+            // A joint at a limit that the step would push beyond it takes no part in the step
+            // (its column dropped, the step solved again): clamping it instead lets only part of
+            // each step through, and the iteration crawls (the 2F-85's linkage: 7 steps on
+            // average, up to 60, where Newton needs 2–3).
+            let mut dq = nalgebra::DVector::zeros(n);
+            for _ in 0..n {
+                let a = &jac * jac.transpose() + nalgebra::DMatrix::identity(m, m) * 1e-8;
+                let Some(w) = a.lu().solve(&r) else { break };
+                dq = -(jac.transpose() * w);
+                let blocked: Vec<usize> = (0..n)
+                    .filter(|&j| {
+                        let (lo, hi) = self.joints[j].limits();
+                        (q[j] <= lo && dq[j] < 0.0) || (q[j] >= hi && dq[j] > 0.0)
+                    })
+                    .collect();
+                if blocked.is_empty() {
+                    break;
+                }
+                for j in blocked {
+                    jac.column_mut(j).fill(0.0);
+                }
+            }
             for (j, v) in q.iter_mut().enumerate() {
                 let (lo, hi) = self.joints[j].limits();
                 *v = (*v + dq[j]).clamp(lo, hi);

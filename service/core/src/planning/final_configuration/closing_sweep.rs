@@ -110,11 +110,14 @@ impl SweepHand<'_> {
 
     /// Joints for per-finger, per-flexion-joint path parameters, and the hand posed there (a
     /// linkage's projection ends with the forward kinematics of the joints it settles on).
+    /// A linkage's projection starts from `warm` (the joints of a nearby step on the path, so
+    /// that a few Newton steps settle it), the other joints from `base`.
     fn configure_posed(
         &self,
         base: &[f64],
         at_base: &ForwardKinematics,
         s: &[(usize, Vec<f64>)],
+        warm: &[f64],
     ) -> Result<(Vec<f64>, PosedCollision<'_>), FieldError> {
         let mut q = base.to_vec();
         let mut constrained = false;
@@ -130,6 +133,11 @@ impl SweepHand<'_> {
         self.hand.tree.clamp(&mut q);
         let tree = &self.hand.tree;
         if constrained && !(tree.loop_closures.is_empty() && tree.couplings.is_empty()) {
+            for (j, x) in q.iter_mut().enumerate() {
+                if !held.contains(&j) {
+                    *x = warm[j];
+                }
+            }
             let (_, fk) = tree.project_constraints_fk(&mut q, &held)?;
             let posed = self.collision.posed_fk(&fk, &self.root_in_world);
             return Ok((q, posed));
@@ -203,6 +211,7 @@ pub fn close_fingers(
     let ds = 1.0 / STEPS as f64;
     let mut near = NearPoints::default();
     let at_base = h.hand.tree.forward(base)?;
+    let mut warm = base.to_vec();
     for _ in 0..(2 * STEPS) {
         if active.iter().all(|a| a.iter().all(|x| !x)) {
             break;
@@ -222,7 +231,7 @@ pub fn close_fingers(
                 .collect::<Vec<_>>()
         };
         let next = advance(&s, &active, ds);
-        let (_, posed) = h.configure_posed(base, &at_base, &next)?;
+        let (q_next, posed) = h.configure_posed(base, &at_base, &next, &warm)?;
         // Which still-moving links touch now.
         let mut hit = false;
         for (i, ls) in links.iter().enumerate() {
@@ -235,6 +244,7 @@ pub fn close_fingers(
         }
         if !hit {
             s = next;
+            warm = q_next;
             // Joints that reached the closed limit stop.
             for (i, (_, v)) in s.iter().enumerate() {
                 for (k, x) in v.iter().enumerate() {
@@ -249,7 +259,8 @@ pub fn close_fingers(
         let (mut lo, mut hi) = (0.0, ds);
         for _ in 0..BISECTIONS {
             let mid = 0.5 * (lo + hi);
-            let (_, posed) = h.configure_posed(base, &at_base, &advance(&s, &active, mid))?;
+            let (_, posed) =
+                h.configure_posed(base, &at_base, &advance(&s, &active, mid), &warm)?;
             let mut any = false;
             for (i, ls) in links.iter().enumerate() {
                 for (l, (_, pieces)) in ls.iter().enumerate() {
@@ -262,7 +273,7 @@ pub fn close_fingers(
             if any { hi = mid } else { lo = mid }
         }
         let touch = advance(&s, &active, hi);
-        let (_, posed) = h.configure_posed(base, &at_base, &touch)?;
+        let (_, posed) = h.configure_posed(base, &at_base, &touch, &warm)?;
         s = advance(&s, &active, lo);
         // Stop the joints moving each link that touches at `hi`.
         for (i, ls) in links.iter().enumerate() {
@@ -297,7 +308,7 @@ pub fn close_fingers(
             }
         }
     }
-    let (joints, posed) = h.configure_posed(base, &at_base, &s)?;
+    let (joints, posed) = h.configure_posed(base, &at_base, &s, &warm)?;
     let mut contacts = Vec::new();
     for (i, ls) in links.iter().enumerate() {
         for (b, pieces) in ls {
