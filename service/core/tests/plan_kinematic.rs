@@ -188,6 +188,14 @@ fn proposals_clear_the_plane_and_come_ranked() {
             assert_eq!(p.candidates[0].hand_pose, p.hand_pose);
             let plane = p.support_plane.unwrap();
             for (k, c) in p.candidates.iter().enumerate() {
+                // Every candidate a client may fall back on is whole: the search completes the
+                // squeeze and the opening of one it judged by its contacts alone.
+                assert!(
+                    c.joints.is_empty()
+                        || (c.squeeze_joints.len() == c.joints.len()
+                            && c.pregrasp_joints.len() == c.joints.len()),
+                    "{file} {object:?} candidate {k}"
+                );
                 let (Some(a), false) = (c.approach, c.pregrasp_joints.is_empty()) else {
                     continue;
                 };

@@ -25,7 +25,9 @@
 //!    inside both friction cones), the
 //!    grasp and the squeeze are clear of the table and linked fingers push the object at most
 //!    [`MAX_PUSH`]; ranked by the force at the estimated centre of mass the contacts resist in
-//!    their weakest direction ([`super::robustness`]), then by Q of Eq 5.2.
+//!    their weakest direction ([`super::robustness`]), then by Q of Eq 5.2. A candidate its
+//!    contacts alone rule out (one side touched, a pair outside its friction cones or driven
+//!    each on its own) gets its squeeze and opening ([`grip`]) only if it is output.
 //!
 //! Candidates ([`order`]): up to four stage-1 oppositions (from the attention point and the
 //! surface point over the centre of mass, `dual_stage::opposition_stage_about`) and the best
@@ -39,6 +41,7 @@
 
 pub mod closing_sweep;
 mod contacts;
+mod grip;
 mod object_view;
 mod order;
 pub mod placement;
@@ -53,11 +56,10 @@ use crate::error::FieldError;
 use crate::hand::kinematics::PreShape;
 use closing_sweep::{SweepContact, SweepHand, close_fingers};
 use contacts::{outside_friction_cone, palm_contacts, unlinked_fingers, unlinked_pair};
+use grip::{Pending, grip};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 pub use object_view::{COLLISION_CELL, ObjectView};
 use order::candidate_order;
-use pregrasp::{advance_contacts, joints_at};
-use squeeze::squeeze_joints;
 
 /// Largest push of a linked finger into the object while its group closes, m.
 pub const MAX_PUSH: f64 = 0.015;
@@ -123,6 +125,8 @@ pub struct FinalConfiguration {
     cut: bool,
     /// Whether S < ε is all that keeps the candidate from being feasible.
     short_of_epsilon_only: bool,
+    /// What it lacks until it is output, when its contacts alone rule it out.
+    pending: Option<Pending>,
 }
 
 impl FinalConfiguration {
@@ -326,7 +330,7 @@ pub fn search(
                 || o.hand_pose.rotation.angle_to(&c.hand_pose.rotation) > 15f64.to_radians()
         });
         if distinct {
-            out.push(c.with_robustness(ctx));
+            out.push(c.completed(ctx, model, &object)?.with_robustness(ctx));
         }
         if out.len() == want {
             break;
@@ -577,55 +581,6 @@ fn judge_with(
     };
     let mut contacts = closed.contacts.clone();
     contacts.extend(palm_contacts(model, &sweep, &closed.joints, object)?);
-    let frame = squeeze::GripFrame {
-        centre_of_mass: ctx.shape.center,
-        radius: ctx.shape.radius,
-        friction: ctx.options.friction,
-    };
-    let squeeze = squeeze_joints(
-        model,
-        &sweep,
-        &closed,
-        &contacts,
-        ctx.options.squeeze_depth,
-        &frame,
-    )?;
-    // The pre-grasp opening: every finger backed off its touch by the same travel, so that
-    // all arrive together — the tightest of PREGRASP_TRAVELS with which the hand so shaped
-    // still comes in clear (else the pre-shape it came in with).
-    let mut q_pre = q_pre;
-    for travel in PREGRASP_TRAVELS {
-        let mut opening = advance_contacts(model, &sweep, &closed, &contacts, -travel, s0)?;
-        for (_, sv) in &mut opening {
-            sv.iter_mut().for_each(|x| *x = x.max(s0));
-        }
-        let q_open = joints_at(model, &closed, &opening)?;
-        if let Some(t2) = placement::move_in(
-            model,
-            &q_open,
-            &hand_pose,
-            &a,
-            ctx.options.pregrasp_distance,
-            0.0,
-            object,
-        )? && t2 >= -1e-9
-        {
-            q_pre = q_open;
-            break;
-        }
-    }
-    // The table at the grasp and the squeeze (the pre-grasp and the way in were kept clear).
-    let plane_clearance = match object.plane {
-        Some(pl) => {
-            let mut c = f64::INFINITY;
-            for q in [&closed.joints, &squeeze] {
-                let fk = hand.tree.forward(q)?;
-                c = c.min(model.collision.posed_fk(&fk, &root).plane_clearance(pl));
-            }
-            Some(c)
-        }
-        None => None,
-    };
     let cps: Vec<ContactPoint> = contacts
         .iter()
         .map(|c| ContactPoint {
@@ -645,7 +600,7 @@ fn judge_with(
     let h2_side = contacts
         .iter()
         .any(|c| c.finger.is_some_and(|f| pre.h2.contains(&f)));
-    let reason = if !(h1_side && h2_side) {
+    let early = if !(h1_side && h2_side) {
         Some(format!(
             "closing the fingers at the planned pose touches {} side of the object",
             if h1_side || h2_side {
@@ -665,6 +620,25 @@ fn judge_with(
              balance without a third contact",
             hand.fingers[f1].name, hand.fingers[f2].name
         ))
+    } else {
+        None
+    };
+    // The squeeze and the pre-grasp opening: now for a candidate the contacts leave in the
+    // running, when it is output for one they already rule out (`completed`).
+    let (squeeze, q_pre, plane_clearance, pending) = if early.is_some() {
+        let pending = Pending {
+            closed: closed.clone(),
+            s0,
+        };
+        (Vec::new(), q_pre, None, Some(pending))
+    } else {
+        let (squeeze, q_pre, clearance) = grip(
+            ctx, model, object, &sweep, &closed, &contacts, &hand_pose, &a, q_pre, s0,
+        )?;
+        (squeeze, q_pre, clearance, None)
+    };
+    let reason = if early.is_some() {
+        early
     } else if plane_clearance.is_some_and(|c| c < -PLANE_TOLERANCE) {
         Some(format!(
             "the closed hand reaches {:.1} mm into the support plane",
@@ -720,5 +694,6 @@ fn judge_with(
         reason,
         score,
         cut: false,
+        pending,
     }))
 }
