@@ -23,10 +23,12 @@
 //! - **balanced grip**: when every closing servo has a force limit, there are two or more, and
 //!   the weakest flexion servo among them pushes at least [`BALANCE_MARGIN`] × [`GRIP_FORCE`]
 //!   at its limit at the far end of its finger (limit · gear / lever), the close keeps the
-//!   plan's squeeze proportions within the limits (`closing::within_force_limits`): the hand
-//!   has force to spare, and servos that saturate one by one no longer push in the proportions
-//!   graspd balanced (Table 5.2, 20 trials, paired: the Barrett, 33 N, 143 → 149 of 160, the
-//!   banana 9 → 13, no object lost). A weaker hand needs all its force: the Shadow (6.5 N) went
+//!   plan's squeeze proportions within the limits (`closing::within_force_limits`, the most
+//!   loaded servo at its limit): the hand has force to spare, and servos that saturate one by
+//!   one no longer push in the proportions graspd balanced (Table 5.2, 20 trials, paired: the
+//!   Barrett, 33 N, 143 → 149 of 160, the banana 9 → 13, no object lost, with the most loaded
+//!   servo asked twice its limit; at its limit, session 13: fused views 148 → 155, all 13
+//!   objects 253 → 248 — the sugar box 20 → 15 —, Table 5.2 153 → 153). A weaker hand needs all its force: the Shadow (6.5 N) went
 //!   126 → 120 at the same rule, 91 at margin 1 (its objects slipped in the lift), 114 with
 //!   half its servos at their limits and 121 with every one at least at its limit; it squeezes
 //!   as planned, its servos saturating where they must;
@@ -58,9 +60,9 @@ pub const MIN_SQUEEZE_DEPTH: f64 = 0.005;
 /// for household objects should squeeze with, whatever its servos' gains.
 pub const GRIP_FORCE: f64 = 10.0;
 
-/// A hand grips balanced within its force limits when its weakest force-limited flexion servo
-/// pushes at least this many [`GRIP_FORCE`]s at its limit at the far end of its finger; its
-/// most loaded servo is then asked this many times its limit (`closing::within_force_limits`).
+/// A hand grips balanced within its force limits (`closing::within_force_limits`) when its
+/// weakest force-limited flexion servo pushes at least this many [`GRIP_FORCE`]s at its limit
+/// at the far end of its finger.
 pub const BALANCE_MARGIN: f64 = 2.0;
 
 /// One closing actuator and its command range.

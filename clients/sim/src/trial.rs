@@ -36,7 +36,7 @@
 
 use crate::camera::{self, Intrinsics, RgbdImage};
 use crate::debug;
-use crate::hand::{BALANCE_MARGIN, SimHand};
+use crate::hand::SimHand;
 pub use crate::record::{Outcome, TrialRecord};
 use crate::scene::{PARKED, Scene, from_mj, on_table, to_mj};
 use crate::service::{PlanAsk, PlanResult, Service, grasp_type_name, pose_from_proto};
@@ -554,7 +554,7 @@ fn execute(
     // Close (crate::closing): guarded unless the options ask for the open loop.
     let (before_p, before_q) = (trial.object_position(), trial.object_orientation());
     let closed = if trial.scene.balanced_grip {
-        crate::closing::within_force_limits(&trial.scene.model, &grasp, &closed, BALANCE_MARGIN)
+        crate::closing::within_force_limits(&trial.scene.model, &grasp, &closed)
     } else {
         closed
     };

@@ -111,8 +111,8 @@ fn the_balanced_grip_follows_the_force_limits() {
 
 /// The balanced squeeze commands on the Barrett (kp 20, force limits ±3 N·m on every finger
 /// servo), by hand: the plan asks the middle finger's proximal servo for 0.35 rad past its
-/// touch and the thumb's for 0.5 rad (the index stays); at margin 2 the thumb, the most loaded,
-/// is asked 2 × 3 = 6 N·m, i.e. 6/20 = 0.3 rad, and the middle 0.35/0.5 of that, 0.21 rad —
+/// touch and the thumb's for 0.5 rad (the index stays); the thumb, the most loaded, is asked
+/// its limit, 3 N·m, i.e. 3/20 = 0.15 rad, and the middle 0.35/0.5 of that, 0.105 rad —
 /// proportions kept, where the servos as planned would push 7 and 10 N·m, both cut to 3.
 #[test]
 fn the_balanced_squeeze_keeps_the_plans_proportions() {
@@ -126,14 +126,14 @@ fn the_balanced_squeeze_keeps_the_plans_proportions() {
     let mut squeeze = touch.clone();
     squeeze[id("middle_med")] += 0.35;
     squeeze[id("thumb_med")] += 0.5;
-    let out = within_force_limits(&mj, &touch, &squeeze, 2.0);
-    assert!((out[id("thumb_med")] - 0.8).abs() < 1e-9, "{out:?}");
-    assert!((out[id("middle_med")] - 0.71).abs() < 1e-9, "{out:?}");
+    let out = within_force_limits(&mj, &touch, &squeeze);
+    assert!((out[id("thumb_med")] - 0.65).abs() < 1e-9, "{out:?}");
+    assert!((out[id("middle_med")] - 0.605).abs() < 1e-9, "{out:?}");
     assert_eq!(out[id("index_med")], 0.5);
     // One travelling actuator has nothing to balance against: the plan as it is.
     let mut one = touch.clone();
     one[id("thumb_med")] += 0.5;
-    assert_eq!(within_force_limits(&mj, &touch, &one, 2.0), one);
+    assert_eq!(within_force_limits(&mj, &touch, &one), one);
 }
 
 /// Each shared MJCF hand as derived from its model alone: closing actuators found, and driving
