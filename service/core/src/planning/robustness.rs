@@ -54,8 +54,8 @@ pub fn robustness(
 
 /// [`robustness`], stopped as soon as the weakest axis is known to be at most `floor` (a
 /// search that only wants figures above it spares the remaining programs): `Err` then, with
-/// the axes solved or bounded so far (the rest 0) and `weakest` the least of those — at least
-/// the true weakest, and ≤ `floor`.
+/// the axes solved so far (the rest 0) and `weakest` the least of those — at least the true
+/// weakest, and ≤ `floor`.
 pub fn robustness_above(
     contacts: &[ContactPoint],
     centre_of_mass: &Point3<f64>,
@@ -75,25 +75,9 @@ pub fn robustness_above(
     ];
     let mut axes = [0.0; 6];
     let mut weakest = f64::INFINITY;
-    // The likely weakest axes first (least force bound), so that a floor stops the programs
-    // early; an axis whose bound is already at most the floor stops them without its program.
-    let bounds = dirs.map(|d| force_bound(contacts, friction, &d));
-    let mut order = [0, 1, 2, 3, 4, 5];
-    order.sort_by(|&a, &b| bounds[a].total_cmp(&bounds[b]));
-    for a in order {
-        axes[a] = if bounds[a] <= floor {
-            bounds[a]
-        } else {
-            resisted_force(
-                contacts,
-                centre_of_mass,
-                radius,
-                friction,
-                patch_radius,
-                &dirs[a],
-            )
-        };
-        weakest = weakest.min(axes[a]);
+    for (a, d) in axes.iter_mut().zip(&dirs) {
+        *a = resisted_force(contacts, centre_of_mass, radius, friction, patch_radius, d);
+        weakest = weakest.min(*a);
         if weakest <= floor {
             return Err(Robustness {
                 axes,
@@ -120,25 +104,6 @@ pub fn robustness_above(
         weakest,
         gravity,
     })
-}
-
-/// An upper bound of [`resisted_force`] along `direction` from the force balance alone: each
-/// contact opposes it with at most the best edge of its friction cone at unit normal force.
-fn force_bound(contacts: &[ContactPoint], friction: f64, direction: &Vector3<f64>) -> f64 {
-    let mu = friction.max(0.0);
-    contacts
-        .iter()
-        .map(|c| {
-            let inward = -c.normal;
-            let (t1, t2) = tangents(&inward);
-            (0..CONE_EDGES)
-                .map(|e| {
-                    let phi = std::f64::consts::TAU * e as f64 / CONE_EDGES as f64;
-                    -(inward + mu * (phi.cos() * t1 + phi.sin() * t2)).dot(direction)
-                })
-                .fold(0.0, f64::max)
-        })
-        .sum()
 }
 
 /// The largest t such that the contacts balance a force t·`direction` applied at
