@@ -28,10 +28,12 @@
 //!   one no longer push in the proportions graspd balanced (Table 5.2, 20 trials, paired: the
 //!   Barrett, 33 N, 143 → 149 of 160, the banana 9 → 13, no object lost, with the most loaded
 //!   servo asked twice its limit; at its limit, session 13: fused views 148 → 155, all 13
-//!   objects 253 → 248 — the sugar box 20 → 15 —, Table 5.2 153 → 153). A weaker hand needs all its force: the Shadow (6.5 N) went
-//!   126 → 120 at the same rule, 91 at margin 1 (its objects slipped in the lift), 114 with
-//!   half its servos at their limits and 121 with every one at least at its limit; it squeezes
-//!   as planned, its servos saturating where they must;
+//!   objects 253 → 248 — the sugar box 20 → 15 —, Table 5.2 153 → 153). A weaker hand needs
+//!   all its force: the Shadow (6.5 N) went 126 → 120 at the same rule, 91 at margin 1 (its
+//!   objects slipped in the lift), 114 with half its servos at their limits and 121 with every
+//!   one at least at its limit; it squeezes as planned, its servos saturating where they must
+//!   (session 13, six Table 5.2 objects: in proportion at its limits it knocks no object away in
+//!   the close, but holds the soup can 17 → 5 and the mustard bottle 13 → 5 of 20);
 //! - **graspd name**: the model's name (`<mujoco model=…>`) made a graspd name.
 
 use crate::SimError;
