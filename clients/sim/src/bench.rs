@@ -61,6 +61,8 @@ pub struct BenchReport {
     pub seed: u64,
     pub jobs: usize,
     pub input: String,
+    /// How the hand closed and gripped: guarded or open loop, with or without the grip reflex.
+    pub grip: String,
     pub image: Intrinsics,
     pub wall_s: f64,
     pub trials_per_minute: f64,
@@ -175,6 +177,19 @@ pub fn run_bench(config: &BenchConfig, service: &Service) -> Result<BenchReport,
         } else {
             "single-view RGB-D".into()
         },
+        grip: format!(
+            "{} close, {}",
+            if config.options.guarded_close {
+                "guarded"
+            } else {
+                "open-loop"
+            },
+            if config.options.grip_reflex {
+                "grip reflex on slip"
+            } else {
+                "the grip of the close throughout"
+            }
+        ),
         image: config.options.intrinsics,
         wall_s,
         trials_per_minute: records.len() as f64 / wall_s * 60.0,
@@ -335,14 +350,15 @@ fn markdown(report: &BenchReport, hands: &[SimHand]) -> String {
     );
     let _ = writeln!(
         s,
-        "\n{} trials per cell, seeds {}..{}, {} input ({}×{}), {} worker threads: {:.0} s wall, \
-         {:.1} trials/min.",
+        "\n{} trials per cell, seeds {}..{}, {} input ({}×{}), {}, {} worker threads: {:.0} s \
+         wall, {:.1} trials/min.",
         report.trials_per_cell,
         report.seed,
         report.seed + report.trials_per_cell as u64,
         report.input,
         report.image.width,
         report.image.height,
+        report.grip,
         report.jobs,
         report.wall_s,
         report.trials_per_minute

@@ -33,6 +33,7 @@ pub const DIRECTIONS: [[f64; 3]; 6] = [
 /// and restores that state; returns per direction whether the object stayed.
 pub fn six_directions(trial: &mut Trial) -> [bool; 6] {
     let saved = trial.data.clone();
+    let saved_reflex = trial.reflex.clone();
     let body = trial.scene.object_bodies[0];
     let mass = trial.scene.model.body_mass()[body];
     let g = Vector3::from(trial.scene.model.ffi().opt.gravity);
@@ -51,6 +52,7 @@ pub fn six_directions(trial: &mut Trial) -> [bool; 6] {
         let turn = start_q.angle_to(&trial.object_orientation()).to_degrees();
         held[k] = shift <= MAX_SHIFT_M && turn <= MAX_TURN_DEG && trial.hand_bodies_touching() > 0;
         saved.copy_to(&mut trial.data).expect("the same model");
+        trial.reflex = saved_reflex.clone();
     }
     held
 }

@@ -9,6 +9,7 @@ pub mod compare;
 pub mod completion;
 mod debug;
 pub mod gravity;
+pub mod grip_reflex;
 pub mod hand;
 pub mod object;
 pub mod record;

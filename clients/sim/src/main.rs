@@ -47,6 +47,10 @@ struct Cli {
     /// what it moves touches the object and squeezes from there).
     #[arg(long, global = true)]
     open_loop: bool,
+    /// Keep the grip of the close when the object slides in the lift (default: grip harder in
+    /// the plan's proportions, as a hand with tactile sensing does; `grip_reflex.rs`).
+    #[arg(long, global = true)]
+    no_grip_reflex: bool,
     /// Execute the plan ranked this far down graspd's candidates (0: the best), as a robot
     /// stack falling back would.
     #[arg(long, default_value_t = 0, global = true)]
@@ -229,6 +233,7 @@ fn real_main() -> Result<(), SimError> {
         place_range: cli.place_range,
         views: cli.views,
         gravity_test: !cli.skip_gravity_test,
+        grip_reflex: !cli.no_grip_reflex,
     };
     if let Command::Completion { runs } = &cli.command {
         let scores = graspd_sim::completion::run_completion(

@@ -40,7 +40,6 @@ use crate::trial::{
 use graspd_core::tactile::layout::SensorLayout;
 use graspd_proto::v1 as pb;
 use mujoco_rs::prelude::*;
-use nalgebra::{Point3, Vector3};
 use rand::{RngExt, SeedableRng};
 use serde::Serialize;
 
@@ -159,27 +158,10 @@ fn pad_state(trial: &Trial, pad: usize) -> (f64, f64) {
     let mut normal = 0.0;
     let mut slip: f64 = 0.0;
     for (i, _) in trial.hand_contacts_with_object().filter(|&(_, b)| b == pad) {
-        let c = &trial.data.contact()[i];
         normal += trial.data.contact_force(i)[0].max(0.0);
-        let n = Vector3::new(c.frame[0], c.frame[1], c.frame[2]);
-        let p = Point3::from(c.pos);
-        let v = point_velocity(trial, obj, &p) - point_velocity(trial, pad, &p);
-        slip = slip.max((v - n * v.dot(&n)).norm());
+        slip = slip.max(crate::grip_reflex::contact_sliding(trial, i, obj, pad));
     }
     (normal, slip)
-}
-
-/// Velocity of body `b`'s material point at `p` (world).
-fn point_velocity(trial: &Trial, b: usize, p: &Point3<f64>) -> Vector3<f64> {
-    let v = trial
-        .data
-        .object_velocity(MjtObjBase::mjOBJ_XBODY, b, false);
-    let (w, lin) = (
-        Vector3::new(v[0], v[1], v[2]),
-        Vector3::new(v[3], v[4], v[5]),
-    );
-    let o = trial.data.xpos()[b];
-    lin + w.cross(&(p - Point3::new(o[0], o[1], o[2])))
 }
 
 /// Drives the closing actuators as force sources toward actuator force `ft`.

@@ -15,7 +15,9 @@
 //!    settle — guarded (each
 //!    actuator stops where what it moves touches the object and squeezes from there), or open
 //!    loop when asked ([`crate::closing`]);
-//! 6. lift: the base rises [`LIFT_M`] in [`LIFT_S`]; hold [`HOLD_S`];
+//! 6. lift: the base rises [`LIFT_M`] in [`LIFT_S`]; hold [`HOLD_S`]; from here on the hand
+//!    grips harder, in the plan's proportions, while the object slides in it (the grip
+//!    reflex, [`crate::grip_reflex`]; off with `--no-grip-reflex`);
 //! 7. shake: [`SHAKE_S`] of a sinusoidal displacement of amplitude [`SHAKE_AMPLITUDE_M`] at
 //!    [`SHAKE_HZ`] along (1, 1, 0.5)/|·| (peak acceleration ≈ 3.2 m/s²), then 0.3 s still.
 //!
@@ -89,12 +91,18 @@ pub struct TrialOptions {
     pub views: usize,
     /// Run the six-direction gravity test after the hold ([`crate::gravity`]).
     pub gravity_test: bool,
+    /// Grip harder when the object slides in the hand after the close
+    /// ([`crate::grip_reflex`]); off: the grip of the close throughout, as a grasp benchmark's
+    /// fixed squeeze.
+    pub grip_reflex: bool,
 }
 
 /// A trial's state: the scene's data plus the commanded base pose.
 pub struct Trial<'a> {
     pub scene: &'a Scene,
     pub data: MjData<&'a MjModel>,
+    /// The armed grip reflex, applied before every step.
+    pub reflex: Option<crate::grip_reflex::GripReflex>,
 }
 
 /// The seeded object placement within ±`range` m: (x, y, yaw).
@@ -126,7 +134,11 @@ impl<'a> Trial<'a> {
                 data.xfrc_applied_mut()[b][..3].copy_from_slice(&[-m * g[0], -m * g[1], -m * g[2]]);
             }
         }
-        let mut t = Trial { scene, data };
+        let mut t = Trial {
+            scene,
+            data,
+            reflex: None,
+        };
         t.place_base(&from_mj(&PARKED, &[1.0, 0.0, 0.0, 0.0]));
         t.open_hand();
         t.data.forward();
@@ -141,6 +153,10 @@ impl<'a> Trial<'a> {
             .max(1.0) as usize;
         for i in 0..n {
             each(self, (i + 1) as f64 / n as f64);
+            if let Some(mut r) = self.reflex.take() {
+                r.apply(self);
+                self.reflex = Some(r);
+            }
             self.data.step();
         }
     }
@@ -553,12 +569,15 @@ fn execute(
     };
     // Close (crate::closing): guarded unless the options ask for the open loop.
     let (before_p, before_q) = (trial.object_position(), trial.object_orientation());
-    let closed = if trial.scene.balanced_grip {
+    let commands = if trial.scene.balanced_grip {
         crate::closing::within_force_limits(&trial.scene.model, &grasp, &closed)
     } else {
-        closed
+        closed.clone()
     };
-    let at_touch = crate::closing::close(trial, &grasp, &closed, opts.guarded_close);
+    let at_touch = crate::closing::close(trial, &grasp, &commands, opts.guarded_close);
+    if opts.grip_reflex {
+        trial.reflex = crate::grip_reflex::GripReflex::arm(trial, &grasp, &closed);
+    }
     debug::snapshot(trial, "closed");
     debug::forces(trial, "closed", &grasp, &closed);
     let touching = trial.hand_bodies_touching();

@@ -136,6 +136,55 @@ fn the_balanced_squeeze_keeps_the_plans_proportions() {
     assert_eq!(within_force_limits(&mj, &touch, &one), one);
 }
 
+/// The grip reflex's reinforcement on the Shadow (servo gains 5 N·m/rad after graspd-sim's
+/// scale of 5 — 2.5 for the distal tendons —, force limits ±1 on every finger servo), by hand:
+/// the plan's squeeze moves FFJ3 0.3 rad past its touch, the FFJ1+FFJ2 tendon 0.4 (its share
+/// halves: the tendon's force drives both joints, 0.2) and THJ1 0.15. FFJ3, the most loaded,
+/// gets its limit, 1 N·m, the others the same proportion of their share: the tendon 2/3, THJ1
+/// 1/2. At full gain each command rises by force over gain: 0.2, 0.267, 0.1 rad.
+#[test]
+fn the_grip_reflex_reinforces_in_the_plans_proportions() {
+    use graspd_sim::grip_reflex::GripReflex;
+    use mujoco_rs::prelude::*;
+    let Some(data) = testdata() else { return };
+    let hand = SimHand::load("shadow", &data.join("hands")).unwrap();
+    let o = SimObject::load(&data.join("objects"), "tomato_soup_can").unwrap();
+    let scene = Scene::build(&hand, &[(&o, on_table(0.0, 0.0, 0.0))]).unwrap();
+    let mut trial = Trial::new(&scene, [0.0, 0.0, 0.0]);
+    let id = |n: &str| {
+        scene
+            .model
+            .name_to_id(MjtObjBase::mjOBJ_ACTUATOR, &format!("hand/rh_A_{n}"))
+            .unwrap()
+    };
+    let touch = trial.data.ctrl().to_vec();
+    let mut squeeze = touch.clone();
+    for (n, t) in [("FFJ3", 0.3), ("FFJ0", 0.4), ("THJ1", 0.15)] {
+        squeeze[id(n)] += t;
+    }
+    let mut reflex = GripReflex::arm(&trial, &touch, &squeeze).unwrap();
+    // Armed, it holds the commands of the close until the object slides.
+    reflex.apply(&mut trial);
+    assert_eq!(reflex.gain, 0.0);
+    assert_eq!(trial.data.ctrl().to_vec(), touch);
+    reflex.gain = 1.0;
+    reflex.apply(&mut trial);
+    let rise = |n: &str| trial.data.ctrl()[id(n)] - touch[id(n)];
+    assert!((rise("FFJ3") - 0.2).abs() < 1e-9, "{}", rise("FFJ3"));
+    assert!((rise("FFJ0") - 0.4 / 1.5).abs() < 1e-9, "{}", rise("FFJ0"));
+    assert!((rise("THJ1") - 0.1).abs() < 1e-9, "{}", rise("THJ1"));
+    assert_eq!(rise("MFJ3"), 0.0);
+    // Nothing travels: nothing to reinforce.
+    assert!(GripReflex::arm(&trial, &touch, &touch).is_none());
+    // The Allegro's servos have no force limit: no strength to reinforce up to.
+    let allegro = SimHand::load("allegro", &data.join("hands")).unwrap();
+    let scene = Scene::build(&allegro, &[(&o, on_table(0.0, 0.0, 0.0))]).unwrap();
+    let trial = Trial::new(&scene, [0.0, 0.0, 0.0]);
+    let touch = trial.data.ctrl().to_vec();
+    let squeeze: Vec<f64> = touch.iter().map(|c| c + 0.1).collect();
+    assert!(GripReflex::arm(&trial, &touch, &squeeze).is_none());
+}
+
 /// Each shared MJCF hand as derived from its model alone: closing actuators found, and driving
 /// them from their open to their closed commands in MuJoCo (the hand alone, fixed in the world)
 /// brings every fingertip closer to the palm's grasp centre (graspd's `HandSynergy::grasp_centre`,
@@ -415,6 +464,7 @@ fn trial_options() -> TrialOptions {
         place_range: 0.05,
         views: 1,
         gravity_test: false,
+        grip_reflex: true,
     }
 }
 
