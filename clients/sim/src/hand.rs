@@ -33,7 +33,9 @@
 //!   objects slipped in the lift), 114 with half its servos at their limits and 121 with every
 //!   one at least at its limit; it squeezes as planned, its servos saturating where they must
 //!   (session 13, six Table 5.2 objects: in proportion at its limits it knocks no object away in
-//!   the close, but holds the soup can 17 → 5 and the mustard bottle 13 → 5 of 20);
+//!   the close, but holds the soup can 17 → 5 and the mustard bottle 13 → 5 of 20); once the
+//!   object slides, the grip reflex (`grip_reflex.rs`) adds each force-limited servo's share of
+//!   the balanced grip, the most loaded at its limit;
 //! - **graspd name**: the model's name (`<mujoco model=…>`) made a graspd name.
 
 use crate::SimError;
