@@ -579,7 +579,7 @@ fn execute(
         trial.reflex = crate::grip_reflex::GripReflex::arm(trial, &grasp, &closed);
     }
     debug::snapshot(trial, "closed");
-    debug::forces(trial, "closed", &grasp, &closed);
+    debug::forces(trial, "closed", &grasp, &commands);
     let touching = trial.hand_bodies_touching();
     rec.contact_bodies = Some(touching);
     rec.moved_close_mm = Some((trial.object_position() - before_p).norm() * 1e3);
