@@ -142,11 +142,7 @@ pub fn within_force_limits(
     touch: &[f64],
     squeeze: &[f64],
 ) -> Vec<f64> {
-    let (gain, limited, range) = (
-        m.actuator_gainprm(),
-        m.actuator_forcelimited(),
-        m.actuator_forcerange(),
-    );
+    let (gain, limited) = (m.actuator_gainprm(), m.actuator_forcelimited());
     let travels: Vec<usize> = (0..touch.len())
         .filter(|&a| (squeeze[a] - touch[a]).abs() > 1e-6)
         .collect();
@@ -157,22 +153,30 @@ pub fn within_force_limits(
     {
         return squeeze.to_vec();
     }
-    // The common scale, force per unit of planned travel, at which the most loaded actuator
-    // asks its limit.
-    let c = travels
+    // Each travelling actuator's share: its planned travel (one stiffness for the hand).
+    let shares: Vec<(usize, f64)> = travels
         .iter()
-        .map(|&a| {
-            let limit = if (squeeze[a] - touch[a]) > 0.0 {
-                range[a][1]
-            } else {
-                -range[a][0]
-            };
-            limit / (squeeze[a] - touch[a]).abs()
-        })
-        .fold(f64::INFINITY, f64::min);
+        .map(|&a| (a, squeeze[a] - touch[a]))
+        .collect();
+    let c = scale_to_limits(m, &shares);
     let mut out = squeeze.to_vec();
     for &a in &travels {
         out[a] = touch[a] + c * (squeeze[a] - touch[a]) / gain[a][0];
     }
     out
+}
+
+/// The common scale c at which the most loaded of force-limited actuators (index, share of a
+/// force distribution) asks its limit: c·share within every actuator's force range, one at its
+/// end.
+pub fn scale_to_limits(m: &mujoco_rs::prelude::MjModel, shares: &[(usize, f64)]) -> f64 {
+    let range = m.actuator_forcerange();
+    shares
+        .iter()
+        .filter(|&&(_, u)| u.abs() > 1e-12)
+        .map(|&(a, u)| {
+            let limit = if u > 0.0 { range[a][1] } else { -range[a][0] };
+            limit.max(0.0) / u.abs()
+        })
+        .fold(f64::INFINITY, f64::min)
 }

@@ -59,11 +59,7 @@ impl GripReflex {
     pub fn arm(trial: &Trial, touch: &[f64], squeeze: &[f64]) -> Option<Self> {
         let m = &trial.scene.model;
         let d = &trial.data;
-        let (gain, limited, range) = (
-            m.actuator_gainprm(),
-            m.actuator_forcelimited(),
-            m.actuator_forcerange(),
-        );
+        let (gain, limited) = (m.actuator_gainprm(), m.actuator_forcelimited());
         let (nnz, adr, moment) = (d.moment_rownnz(), d.moment_rowadr(), d.actuator_moment());
         let travels: Vec<(usize, f64)> = (0..touch.len())
             .map(|a| (a, squeeze[a] - touch[a]))
@@ -76,32 +72,22 @@ impl GripReflex {
         if travels.iter().any(|&(a, _)| !limited[a]) {
             return None;
         }
-        let share: Vec<f64> = travels
+        let shares: Vec<(usize, f64)> = travels
             .iter()
             .map(|&(a, t)| {
                 let s = adr[a] as usize;
                 let g2: f64 = moment[s..s + nnz[a] as usize].iter().map(|x| x * x).sum();
-                t / g2.max(1e-12)
+                (a, t / g2.max(1e-12))
             })
             .collect();
-        // The common scale at which the most loaded actuator asks its limit.
-        let c = travels
-            .iter()
-            .zip(&share)
-            .map(|(&(a, _), &u)| {
-                let limit = if u > 0.0 { range[a][1] } else { -range[a][0] };
-                limit.max(0.0) / u.abs()
-            })
-            .fold(f64::INFINITY, f64::min);
-        let forces = share.iter().map(|u| c * u);
+        let c = crate::closing::scale_to_limits(m, &shares);
         Some(GripReflex {
-            reinforcements: travels
+            reinforcements: shares
                 .iter()
-                .zip(forces)
-                .map(|(&(a, _), force)| Reinforcement {
+                .map(|&(a, u)| Reinforcement {
                     actuator: a,
                     command: d.ctrl()[a],
-                    force,
+                    force: c * u,
                 })
                 .collect(),
             gain: 0.0,
@@ -120,8 +106,11 @@ impl GripReflex {
     /// Measures the slip, updates the gain and sets the reinforced commands (within the
     /// control range).
     pub fn apply(&mut self, trial: &mut Trial) {
-        let dt = trial.scene.model.ffi().opt.timestep;
-        self.gain = Self::rise(self.gain, sliding_speed(trial), dt);
+        // At full gain there is nothing left to measure for.
+        if self.gain < 1.0 {
+            let dt = trial.scene.model.ffi().opt.timestep;
+            self.gain = Self::rise(self.gain, sliding_speed(trial), dt);
+        }
         let m = &trial.scene.model;
         let (gain, limited, range) = (
             m.actuator_gainprm(),
