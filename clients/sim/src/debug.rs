@@ -1,5 +1,6 @@
 //! What `GRASPD_SIM_DEBUG_DIR=DIR` saves of a trial, for looking at it: a picture of each
-//! phase, the plan's posed depth in the true object and the grip after the close.
+//! phase, the plan's posed depth in the true object and the grip after the close and after the
+//! lift.
 
 use crate::camera::{self, Intrinsics};
 use crate::trial::Trial;

@@ -596,6 +596,10 @@ fn execute(
         t.set_base(&(up * root));
     });
     debug::snapshot(trial, "lifted");
+    // The commands held now (the grip reflex may have raised them): a finger whose length
+    // reached its command presses nothing.
+    let held_commands = trial.data.ctrl().to_vec();
+    debug::forces(trial, "lifted", &grasp, &held_commands);
     let height = |t: &Trial| t.object_com().z - start_com.z;
     rec.lift_height = Some(height(trial));
     let lifted = nalgebra::Translation3::new(0.0, 0.0, LIFT_M) * root;
