@@ -31,7 +31,8 @@ impl FinalConfiguration {
             root_in_world: self.root_pose,
         };
         let pre = std::mem::take(&mut self.pregrasp);
-        (self.squeeze, self.pregrasp, self.plane_clearance) = grip(
+        let squeeze;
+        (squeeze, self.pregrasp, self.plane_clearance) = grip(
             ctx,
             model,
             object,
@@ -43,6 +44,7 @@ impl FinalConfiguration {
             pre,
             s0,
         )?;
+        (self.squeeze, self.sliding) = (squeeze.joints, squeeze.slides);
         Ok(self)
     }
 }
@@ -56,9 +58,9 @@ pub(super) struct Pending {
     pub s0: f64,
 }
 
-/// Squeeze joints, pre-grasp joints, and the least clearance of the grasp and the squeeze to
+/// The squeeze, pre-grasp joints, and the least clearance of the grasp and the squeeze to
 /// the table (None without one).
-type Grip = (Vec<f64>, Vec<f64>, Option<f64>);
+type Grip = (squeeze::Squeeze, Vec<f64>, Option<f64>);
 
 /// Module step 3 and the pre-grasp opening of a closed candidate ([`Grip`]).
 #[allow(clippy::too_many_arguments)]
@@ -88,6 +90,7 @@ pub(super) fn grip(
         contacts,
         ctx.options.squeeze_depth,
         &frame,
+        object,
     )?;
     // The pre-grasp opening: every finger backed off its touch by the same travel, so that
     // all arrive together — the tightest of PREGRASP_TRAVELS with which the hand so shaped
@@ -117,7 +120,7 @@ pub(super) fn grip(
     let plane_clearance = match object.plane {
         Some(pl) => {
             let mut c = f64::INFINITY;
-            for q in [&closed.joints, &squeeze] {
+            for q in [&closed.joints, &squeeze.joints] {
                 let fk = hand.tree.forward(q)?;
                 c = c.min(model.collision.posed_fk(&fk, &root).plane_clearance(pl));
             }

@@ -108,6 +108,9 @@ pub struct FinalConfiguration {
     pub grasp: Vec<f64>,
     pub squeeze: Vec<f64>,
     pub contacts: Vec<SweepContact>,
+    /// Per contact, whether the squeeze drives it off the object (`squeeze::Squeeze`); empty
+    /// until the squeeze is computed.
+    sliding: Vec<bool>,
     /// S of Eq 5.3 over the contacts.
     pub gii: f64,
     pub robustness: Robustness,
@@ -138,12 +141,15 @@ impl FinalConfiguration {
     }
 
     /// The contacts the robustness counts: those on a face, not astride an edge
-    /// ([`EDGE_COHERENCE`]).
+    /// ([`EDGE_COHERENCE`]), that the squeeze does not drive off the object (`sliding`).
     fn contact_points(&self) -> Vec<ContactPoint> {
         self.contacts
             .iter()
-            .filter(|c| c.coherence >= EDGE_COHERENCE)
-            .map(|c| ContactPoint {
+            .enumerate()
+            .filter(|(i, c)| {
+                c.coherence >= EDGE_COHERENCE && !self.sliding.get(*i).copied().unwrap_or(false)
+            })
+            .map(|(_, c)| ContactPoint {
                 position: c.position,
                 normal: c.normal,
             })
@@ -625,17 +631,17 @@ fn judge_with(
     };
     // The squeeze and the pre-grasp opening: now for a candidate the contacts leave in the
     // running, when it is output for one they already rule out (`completed`).
-    let (squeeze, q_pre, plane_clearance, pending) = if early.is_some() {
+    let (squeeze, sliding, q_pre, plane_clearance, pending) = if early.is_some() {
         let pending = Pending {
             closed: closed.clone(),
             s0,
         };
-        (Vec::new(), q_pre, None, Some(pending))
+        (Vec::new(), Vec::new(), q_pre, None, Some(pending))
     } else {
         let (squeeze, q_pre, clearance) = grip(
             ctx, model, object, &sweep, &closed, &contacts, &hand_pose, &a, q_pre, s0,
         )?;
-        (squeeze, q_pre, clearance, None)
+        (squeeze.joints, squeeze.slides, q_pre, clearance, None)
     };
     let reason = if early.is_some() {
         early
@@ -682,6 +688,7 @@ fn judge_with(
         grasp: closed.joints,
         squeeze,
         contacts,
+        sliding,
         gii,
         robustness: Robustness::default(),
         plane_clearance,

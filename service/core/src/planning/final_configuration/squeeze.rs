@@ -13,11 +13,12 @@
 //! `depth` along its normal. When the contacts cannot balance (all on one side), each
 //! finger is pressed on its own as deep as `depth` allows (a small linear program). Either way
 //! the squeeze is then scaled back until no contact slides across the surface further than
-//! `depth` ([`limit_slide`]).
+//! `depth` ([`limit_slide`]), and a contact it drives off the object is marked ([`Squeeze`]).
 
 use super::super::grip_forces::{GripContact, balanced_grip};
 use super::super::kinematic_model::KinematicModel;
 use super::closing_sweep::{Closed, SweepContact, SweepHand};
+use super::object_view::ObjectView;
 use crate::error::FieldError;
 use nalgebra::{Point3, Vector3};
 
@@ -43,15 +44,46 @@ pub(super) fn squeeze_joints(
     contacts: &[SweepContact],
     depth: f64,
     frame: &GripFrame,
-) -> Result<Vec<f64>, FieldError> {
-    let q = unlimited_squeeze(model, sweep, closed, contacts, depth, frame)?;
+    object: &ObjectView,
+) -> Result<Squeeze, FieldError> {
+    let (q, held) = unlimited_squeeze(model, sweep, closed, contacts, depth, frame)?;
     let q = limit_slide(model, sweep, closed, contacts, q, depth)?;
+    // A contact of a finger the balanced grip keeps in equilibrium presses with its share of
+    // the balanced forces, inside its friction cone, wherever the squeeze's motion points; one
+    // on a link a held joint moves (or any, pressed finger by finger) is not so kept.
+    let unbalanced = |c: &SweepContact| {
+        held.as_ref().is_none_or(|h| {
+            h.iter()
+                .enumerate()
+                .any(|(j, &x)| x && model.hand.tree.joint_moves(j, c.body))
+        })
+    };
+    let travel = contact_travel(model, sweep, closed, contacts, &q)?;
+    // How far the object reaches from a contact the way the squeeze slides it (asked only of
+    // a contact driven outside its cone).
+    let room = |c: &SweepContact, moved: &Vector3<f64>| {
+        let inward = -c.normal;
+        let m = sweep.root_in_world.rotation * moved;
+        let across = m - inward * m.dot(&inward);
+        if across.norm() < 1e-9 {
+            return f64::INFINITY;
+        }
+        object.reach_along(&c.position, &across.normalize())
+    };
+    let slides = contacts
+        .iter()
+        .zip(&travel)
+        .map(|(c, &(press, slide, moved))| {
+            unbalanced(c)
+                && outside_cone(press, slide, frame.friction)
+                && slide > room(c, &moved) + SLIDE_TOLERANCE
+        })
+        .collect();
     if tracing::enabled!(tracing::Level::TRACE) {
-        let travel = contact_travel(model, sweep, closed, contacts, &q)?;
         let text: Vec<String> = contacts
             .iter()
             .zip(&travel)
-            .map(|(c, (press, slide))| {
+            .map(|(c, (press, slide, _))| {
                 format!(
                     "{:?}: press {:.1} mm slide {:.1} mm",
                     c.finger,
@@ -62,18 +94,43 @@ pub(super) fn squeeze_joints(
             .collect();
         tracing::trace!(contacts = ?text, "squeeze");
     }
-    Ok(q)
+    Ok(Squeeze { joints: q, slides })
+}
+
+/// Sliding of a contact under the squeeze that counts whatever it presses, m.
+const SLIDE_TOLERANCE: f64 = 0.002;
+
+/// Whether a contact the squeeze moves `press` along its inward normal and `slide` across the
+/// surface (m) is driven outside its friction cone (μ = `friction`): slide > μ·press, beyond
+/// [`SLIDE_TOLERANCE`] (one that lifts off presses nothing).
+fn outside_cone(press: f64, slide: f64, friction: f64) -> bool {
+    slide > friction * press.max(0.0) + SLIDE_TOLERANCE
+}
+
+/// The squeeze joints, and per contact whether the squeeze drives it off the object. A finger
+/// the balanced grip keeps in equilibrium presses with its share of the balanced forces,
+/// inside its friction cone, wherever its motion points; a contact on a link that a held joint
+/// moves (or any contact, when the fingers are pressed one by one) is not so kept, and its
+/// motion says where it goes: driven outside its friction cone ([`outside_cone`]) further
+/// across the surface than the object reaches that way from it (its points and their
+/// completion), it wedges nothing and slides along the object and past its end until it
+/// reaches its command. (The Allegro's middle finger 6 mm below a soup can's rim, its distal
+/// joint held, pressed 31 mm and slid 47 mm: in MuJoCo it went over the rim and the can turned
+/// out of the thumb–index pinch.) The robustness does not count such a contact.
+pub(super) struct Squeeze {
+    pub joints: Vec<f64>,
+    pub slides: Vec<bool>,
 }
 
 /// Each contact's motion from the touching joints to `q` (root frame, carried with its link):
-/// (along its inward normal, across the surface), m.
+/// (along its inward normal, across the surface, m; the motion).
 fn contact_travel(
     model: &KinematicModel,
     sweep: &SweepHand,
     closed: &Closed,
     contacts: &[SweepContact],
     q: &[f64],
-) -> Result<Vec<(f64, f64)>, FieldError> {
+) -> Result<Vec<(f64, f64, Vector3<f64>)>, FieldError> {
     let to_root = sweep.root_in_world.inverse();
     let fk0 = model.hand.tree.forward(&closed.joints)?;
     let fk = model.hand.tree.forward(q)?;
@@ -84,7 +141,7 @@ fn contact_travel(
             let m = fk.body_poses[c.body] * local - fk0.body_poses[c.body] * local;
             let inward = to_root.rotation * -c.normal;
             let press = m.dot(&inward);
-            (press, (m - inward * press).norm())
+            (press, (m - inward * press).norm(), m)
         })
         .collect())
 }
@@ -111,7 +168,7 @@ fn limit_slide(
     let slide = |q: &[f64]| -> Result<f64, FieldError> {
         Ok(contact_travel(model, sweep, closed, contacts, q)?
             .iter()
-            .map(|&(_, s)| s)
+            .map(|&(_, s, _)| s)
             .fold(0.0, f64::max))
     };
     if slide(&q)? <= max_slide {
@@ -154,12 +211,12 @@ fn unlimited_squeeze(
     contacts: &[SweepContact],
     depth: f64,
     frame: &GripFrame,
-) -> Result<Vec<f64>, FieldError> {
+) -> Result<(Vec<f64>, Option<Vec<bool>>), FieldError> {
     use microlp::{ComparisonOp, OptimizationDirection, Problem};
     let hand = &model.hand;
     let syn = &model.synergy;
-    if let Some(q) = balanced_squeeze(model, sweep, closed, contacts, depth, frame)? {
-        return Ok(q);
+    if let Some((q, held)) = balanced_squeeze(model, sweep, closed, contacts, depth, frame)? {
+        return Ok((q, Some(held)));
     }
     tracing::trace!("squeeze: the contacts cannot balance; each finger pressed on its own");
     let to_root = sweep.root_in_world.inverse();
@@ -313,7 +370,7 @@ fn unlimited_squeeze(
         };
         q = advanced(&q, ds)?;
     }
-    Ok(q)
+    Ok((q, None))
 }
 
 /// A contact (its index) and how it moves per radian of one joint (root frame).
@@ -333,7 +390,7 @@ fn balanced_squeeze(
     contacts: &[SweepContact],
     depth: f64,
     frame: &GripFrame,
-) -> Result<Option<Vec<f64>>, FieldError> {
+) -> Result<Option<(Vec<f64>, Vec<bool>)>, FieldError> {
     let hand = &model.hand;
     let syn = &model.synergy;
     if contacts
@@ -396,6 +453,7 @@ fn balanced_squeeze(
     // τ_j = Σ_i (∂p_i/∂q_j)·f_i over the pressing contacts (forces in the root frame), and how
     // deep each contact goes per unit of the common scale (linearised).
     let mut press = vec![0.0; contacts.len()];
+    let mut held = vec![false; q0.len()];
     let mut steps: Vec<(usize, f64)> = Vec::with_capacity(moves.len());
     for (joint, dir, v) in &moves {
         let tau: f64 = v
@@ -404,6 +462,9 @@ fn balanced_squeeze(
             .map(|(i, d)| d.dot(&(to_root.rotation * forces[*i])))
             .sum();
         // No joint opens: where the grip asks a joint to push back, it holds at its touch.
+        if tau * dir < 0.0 {
+            held[*joint] = true;
+        }
         let tau = if tau * dir < 0.0 { 0.0 } else { tau };
         for (i, d) in v {
             press[*i] += tau * d.dot(&inward[*i]);
@@ -428,5 +489,24 @@ fn balanced_squeeze(
         }
     }
     hand.tree.clamp(&mut q);
-    Ok(Some(q))
+    Ok(Some((q, held)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::outside_cone;
+
+    /// μ = 0.6: the Allegro's middle finger on a can's rim, pressed 30.7 mm and slid 46.5 mm, is
+    /// driven outside its cone (46.5 > 18.4 mm); a fingertip pressed 27.9 mm and slid 5.5 mm is
+    /// not; at the cone's edge (10 mm, 6 mm) the 2 mm tolerance decides; a contact that lifts
+    /// off presses nothing, so any slide beyond the tolerance is outside.
+    #[test]
+    fn a_contact_slid_further_than_mu_times_its_press_is_outside_its_cone() {
+        assert!(outside_cone(0.0307, 0.0465, 0.6));
+        assert!(!outside_cone(0.0279, 0.0055, 0.6));
+        assert!(!outside_cone(0.010, 0.0079, 0.6));
+        assert!(outside_cone(0.010, 0.0081, 0.6));
+        assert!(outside_cone(-0.003, 0.0025, 0.6));
+        assert!(!outside_cone(-0.003, 0.0015, 0.6));
+    }
 }
