@@ -203,7 +203,8 @@ fn limit_slide(
     Ok(at(lo))
 }
 
-/// The squeeze of [`squeeze_joints`] before its slide limit.
+/// The squeeze of [`squeeze_joints`] before its slide limit, with the joints the balanced grip
+/// holds at their touch (None when the fingers are pressed one by one).
 fn unlimited_squeeze(
     model: &KinematicModel,
     sweep: &SweepHand,
@@ -381,6 +382,10 @@ type ContactMotion = (usize, Vector3<f64>);
 /// (a knuckle's link beside the palm) only pushes back, like the palm.
 const MIN_LEVER: f64 = 0.01;
 
+/// A balanced squeeze: its joints, and per joint whether it holds at its touch (the grip
+/// would have it open).
+type Balanced = (Vec<f64>, Vec<bool>);
+
 /// The balanced squeeze (module doc): None when the contacts cannot balance, or a finger of a
 /// linkage touches (its group is pressed by one path step instead).
 fn balanced_squeeze(
@@ -390,7 +395,7 @@ fn balanced_squeeze(
     contacts: &[SweepContact],
     depth: f64,
     frame: &GripFrame,
-) -> Result<Option<(Vec<f64>, Vec<bool>)>, FieldError> {
+) -> Result<Option<Balanced>, FieldError> {
     let hand = &model.hand;
     let syn = &model.synergy;
     if contacts
