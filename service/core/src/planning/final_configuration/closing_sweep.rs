@@ -232,17 +232,29 @@ pub fn close_fingers(
         };
         let next = advance(&s, &active, ds);
         let (q_next, posed) = h.configure_posed(base, &at_base, &next, &warm)?;
-        // Which still-moving links touch now.
-        let mut hit = false;
-        for (i, ls) in links.iter().enumerate() {
-            for (l, (_, pieces)) in ls.iter().enumerate() {
-                if stopped_links[i][l] || !movers[i][l].iter().any(|&k| active[i][k]) {
-                    continue;
-                }
-                hit |= link_touches(&posed, pieces, object, &mut near);
-            }
-        }
-        if !hit {
+        // Which still-moving links touch: per finger, per link (None: not moving).
+        let touching = |posed: &PosedCollision,
+                        stopped_links: &[Vec<bool>],
+                        active: &[Vec<bool>],
+                        near: &mut NearPoints| {
+            links
+                .iter()
+                .enumerate()
+                .map(|(i, ls)| {
+                    ls.iter()
+                        .enumerate()
+                        .map(|(l, (_, pieces))| {
+                            let moving = !stopped_links[i][l]
+                                && movers[i][l].iter().any(|&k| active[i][k]);
+                            moving.then(|| link_touches(posed, pieces, object, near))
+                        })
+                        .collect::<Vec<Option<bool>>>()
+                })
+                .collect::<Vec<_>>()
+        };
+        let any = |t: &[Vec<Option<bool>>]| t.iter().flatten().any(|x| *x == Some(true));
+        let mut at_hi = touching(&posed, &stopped_links, &active, &mut near);
+        if !any(&at_hi) {
             s = next;
             warm = q_next;
             // Joints that reached the closed limit stop.
@@ -261,27 +273,19 @@ pub fn close_fingers(
             let mid = 0.5 * (lo + hi);
             let (_, posed) =
                 h.configure_posed(base, &at_base, &advance(&s, &active, mid), &warm)?;
-            let mut any = false;
-            for (i, ls) in links.iter().enumerate() {
-                for (l, (_, pieces)) in ls.iter().enumerate() {
-                    if stopped_links[i][l] || !movers[i][l].iter().any(|&k| active[i][k]) {
-                        continue;
-                    }
-                    any |= link_touches(&posed, pieces, object, &mut near);
-                }
+            let at_mid = touching(&posed, &stopped_links, &active, &mut near);
+            if any(&at_mid) {
+                hi = mid;
+                at_hi = at_mid;
+            } else {
+                lo = mid
             }
-            if any { hi = mid } else { lo = mid }
         }
-        let touch = advance(&s, &active, hi);
-        let (_, posed) = h.configure_posed(base, &at_base, &touch, &warm)?;
         s = advance(&s, &active, lo);
         // Stop the joints moving each link that touches at `hi`.
-        for (i, ls) in links.iter().enumerate() {
-            for (l, (_, pieces)) in ls.iter().enumerate() {
-                if stopped_links[i][l] || !movers[i][l].iter().any(|&k| active[i][k]) {
-                    continue;
-                }
-                if !link_touches(&posed, pieces, object, &mut near) {
+        for (i, ls) in at_hi.iter().enumerate() {
+            for (l, t) in ls.iter().enumerate() {
+                if *t != Some(true) {
                     continue;
                 }
                 stopped_links[i][l] = true;

@@ -47,7 +47,8 @@ pub(super) fn squeeze_joints(
     object: &ObjectView,
 ) -> Result<Squeeze, FieldError> {
     let (q, held) = unlimited_squeeze(model, sweep, closed, contacts, depth, frame)?;
-    let q = limit_slide(model, sweep, closed, contacts, q, depth)?;
+    let travels = ContactTravel::new(model, sweep, closed, contacts)?;
+    let (q, travel) = limit_slide(model, &travels, closed, contacts, q, depth)?;
     // A contact of a finger the balanced grip keeps in equilibrium presses with its share of
     // the balanced forces, inside its friction cone, wherever the squeeze's motion points; one
     // on a link a held joint moves (or any, pressed finger by finger) is not so kept.
@@ -58,7 +59,6 @@ pub(super) fn squeeze_joints(
                 .any(|(j, &x)| x && model.hand.tree.joint_moves(j, c.body))
         })
     };
-    let travel = contact_travel(model, sweep, closed, contacts, &q)?;
     // How far the object reaches from a contact the way the squeeze slides it (asked only of
     // a contact driven outside its cone).
     let room = |c: &SweepContact, moved: &Vector3<f64>| {
@@ -122,28 +122,49 @@ pub(super) struct Squeeze {
     pub slides: Vec<bool>,
 }
 
-/// Each contact's motion from the touching joints to `q` (root frame, carried with its link):
-/// (along its inward normal, across the surface, m; the motion).
-fn contact_travel(
-    model: &KinematicModel,
-    sweep: &SweepHand,
-    closed: &Closed,
-    contacts: &[SweepContact],
-    q: &[f64],
-) -> Result<Vec<(f64, f64, Vector3<f64>)>, FieldError> {
-    let to_root = sweep.root_in_world.inverse();
-    let fk0 = model.hand.tree.forward(&closed.joints)?;
-    let fk = model.hand.tree.forward(q)?;
-    Ok(contacts
-        .iter()
-        .map(|c| {
-            let local = fk0.body_poses[c.body].inverse() * (to_root * c.position);
-            let m = fk.body_poses[c.body] * local - fk0.body_poses[c.body] * local;
-            let inward = to_root.rotation * -c.normal;
-            let press = m.dot(&inward);
-            (press, (m - inward * press).norm(), m)
-        })
-        .collect())
+/// Each contact's motion from the touching joints to other joints (root frame, carried with its
+/// link): the contacts on their links, posed once at the touch.
+struct ContactTravel<'a> {
+    model: &'a KinematicModel,
+    /// Per contact: its body, its point in that body's frame, the body's touching pose applied
+    /// to it (root frame) and its inward normal (root frame).
+    at_touch: Vec<(usize, Point3<f64>, Point3<f64>, Vector3<f64>)>,
+}
+
+impl<'a> ContactTravel<'a> {
+    fn new(
+        model: &'a KinematicModel,
+        sweep: &SweepHand,
+        closed: &Closed,
+        contacts: &[SweepContact],
+    ) -> Result<Self, FieldError> {
+        let to_root = sweep.root_in_world.inverse();
+        let fk0 = model.hand.tree.forward(&closed.joints)?;
+        let at_touch = contacts
+            .iter()
+            .map(|c| {
+                let local = fk0.body_poses[c.body].inverse() * (to_root * c.position);
+                let posed = fk0.body_poses[c.body] * local;
+                (c.body, local, posed, to_root.rotation * -c.normal)
+            })
+            .collect();
+        Ok(Self { model, at_touch })
+    }
+
+    /// Per contact, its motion to `q`: (along its inward normal, across the surface, m; the
+    /// motion).
+    fn to(&self, q: &[f64]) -> Result<Vec<(f64, f64, Vector3<f64>)>, FieldError> {
+        let fk = self.model.hand.tree.forward(q)?;
+        Ok(self
+            .at_touch
+            .iter()
+            .map(|(body, local, posed, inward)| {
+                let m = fk.body_poses[*body] * local - posed;
+                let press = m.dot(inward);
+                (press, (m - inward * press).norm(), m)
+            })
+            .collect())
+    }
 }
 
 /// Scales the touching fingers' squeeze back toward their touch, one factor for the whole
@@ -159,20 +180,16 @@ fn contact_travel(
 /// command.
 fn limit_slide(
     model: &KinematicModel,
-    sweep: &SweepHand,
+    travels: &ContactTravel,
     closed: &Closed,
     contacts: &[SweepContact],
     q: Vec<f64>,
     max_slide: f64,
-) -> Result<Vec<f64>, FieldError> {
-    let slide = |q: &[f64]| -> Result<f64, FieldError> {
-        Ok(contact_travel(model, sweep, closed, contacts, q)?
-            .iter()
-            .map(|&(_, s, _)| s)
-            .fold(0.0, f64::max))
-    };
-    if slide(&q)? <= max_slide {
-        return Ok(q);
+) -> Result<(Vec<f64>, Vec<(f64, f64, Vector3<f64>)>), FieldError> {
+    let slide = |t: &[(f64, f64, Vector3<f64>)]| t.iter().map(|&(_, s, _)| s).fold(0.0, f64::max);
+    let travel = travels.to(&q)?;
+    if slide(&travel) <= max_slide {
+        return Ok((q, travel));
     }
     // The joints of fingers that touch scale; a finger that touches nothing keeps its close.
     let mut scaled = vec![false; q.len()];
@@ -192,15 +209,26 @@ fn limit_slide(
         qa
     };
     let (mut lo, mut hi) = (0.0, 1.0);
+    let mut kept = None;
     for _ in 0..10 {
         let mid = 0.5 * (lo + hi);
-        if slide(&at(mid))? <= max_slide {
+        let qm = at(mid);
+        let t = travels.to(&qm)?;
+        if slide(&t) <= max_slide {
             lo = mid;
+            kept = Some((qm, t));
         } else {
             hi = mid;
         }
     }
-    Ok(at(lo))
+    match kept {
+        Some(k) => Ok(k),
+        None => {
+            let q0 = at(0.0);
+            let t = travels.to(&q0)?;
+            Ok((q0, t))
+        }
+    }
 }
 
 /// The squeeze of [`squeeze_joints`] before its slide limit, with the joints the balanced grip
