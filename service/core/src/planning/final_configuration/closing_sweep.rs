@@ -267,13 +267,25 @@ pub fn close_fingers(
             }
             continue;
         }
-        // Refine the first touch: the largest fraction of the step that touches nothing.
+        // Refine the first touch: the largest fraction of the step that touches nothing. Only
+        // the fingers that touch at the whole step are posed and tested (the others, which
+        // touch nothing there, are taken to touch nothing before), unless a linkage ties the
+        // fingers' joints together.
+        let tied = linked.iter().any(|&x| x);
+        let refined: Vec<Vec<bool>> = active
+            .iter()
+            .zip(&at_hi)
+            .map(|(a, t)| {
+                let touched = t.iter().any(|x| *x == Some(true));
+                a.iter().map(|&on| on && (touched || tied)).collect()
+            })
+            .collect();
         let (mut lo, mut hi) = (0.0, ds);
         for _ in 0..BISECTIONS {
             let mid = 0.5 * (lo + hi);
             let (_, posed) =
-                h.configure_posed(base, &at_base, &advance(&s, &active, mid), &warm)?;
-            let at_mid = touching(&posed, &stopped_links, &active, &mut near);
+                h.configure_posed(base, &at_base, &advance(&s, &refined, mid), &warm)?;
+            let at_mid = touching(&posed, &stopped_links, &refined, &mut near);
             if any(&at_mid) {
                 hi = mid;
                 at_hi = at_mid;
