@@ -244,8 +244,8 @@ pub fn close_fingers(
                     ls.iter()
                         .enumerate()
                         .map(|(l, (_, pieces))| {
-                            let moving = !stopped_links[i][l]
-                                && movers[i][l].iter().any(|&k| active[i][k]);
+                            let moving =
+                                !stopped_links[i][l] && movers[i][l].iter().any(|&k| active[i][k]);
                             moving.then(|| link_touches(posed, pieces, object, near))
                         })
                         .collect::<Vec<Option<bool>>>()
