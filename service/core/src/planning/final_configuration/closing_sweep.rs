@@ -6,8 +6,8 @@
 //! with one s until every one of them touches; how far the first ones would then have pushed
 //! into the object is the group's `push`.
 //!
-//! Steps of 1/[`STEPS`] of the path, refined by [`BISECTIONS`] halvings at each first touch; a
-//! link touches when an object point is within [`TOUCH_MARGIN`] of it. The table does not stop a
+//! Steps of 1/[`STEPS`] of the path, refined by [`BISECTIONS`] halvings at each first touch (of
+//! the fingers that touch at the whole step); a link touches when an object point is within [`TOUCH_MARGIN`] of it. The table does not stop a
 //! finger (fingertips slide along it, as they do on a real table); where the closed hand ends
 //! up below it, the caller raises the hand.
 
