@@ -276,7 +276,7 @@ pub fn close_fingers(
             .iter()
             .zip(&at_hi)
             .map(|(a, t)| {
-                let touched = t.iter().any(|x| *x == Some(true));
+                let touched = t.contains(&Some(true));
                 a.iter().map(|&on| on && (touched || tied)).collect()
             })
             .collect();

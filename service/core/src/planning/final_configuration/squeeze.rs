@@ -122,13 +122,24 @@ pub(super) struct Squeeze {
     pub slides: Vec<bool>,
 }
 
+/// A contact's motion: along its inward normal, across the surface (m), and the motion itself
+/// (root frame).
+type Travel = (f64, f64, Vector3<f64>);
+
+/// A contact at the touch: its body, its point in that body's frame and in the root frame, and
+/// its inward normal (root frame).
+struct AtTouch {
+    body: usize,
+    local: Point3<f64>,
+    posed: Point3<f64>,
+    inward: Vector3<f64>,
+}
+
 /// Each contact's motion from the touching joints to other joints (root frame, carried with its
 /// link): the contacts on their links, posed once at the touch.
 struct ContactTravel<'a> {
     model: &'a KinematicModel,
-    /// Per contact: its body, its point in that body's frame, the body's touching pose applied
-    /// to it (root frame) and its inward normal (root frame).
-    at_touch: Vec<(usize, Point3<f64>, Point3<f64>, Vector3<f64>)>,
+    at_touch: Vec<AtTouch>,
 }
 
 impl<'a> ContactTravel<'a> {
@@ -144,24 +155,27 @@ impl<'a> ContactTravel<'a> {
             .iter()
             .map(|c| {
                 let local = fk0.body_poses[c.body].inverse() * (to_root * c.position);
-                let posed = fk0.body_poses[c.body] * local;
-                (c.body, local, posed, to_root.rotation * -c.normal)
+                AtTouch {
+                    body: c.body,
+                    local,
+                    posed: fk0.body_poses[c.body] * local,
+                    inward: to_root.rotation * -c.normal,
+                }
             })
             .collect();
         Ok(Self { model, at_touch })
     }
 
-    /// Per contact, its motion to `q`: (along its inward normal, across the surface, m; the
-    /// motion).
-    fn to(&self, q: &[f64]) -> Result<Vec<(f64, f64, Vector3<f64>)>, FieldError> {
+    /// Per contact, its motion to `q`.
+    fn to(&self, q: &[f64]) -> Result<Vec<Travel>, FieldError> {
         let fk = self.model.hand.tree.forward(q)?;
         Ok(self
             .at_touch
             .iter()
-            .map(|(body, local, posed, inward)| {
-                let m = fk.body_poses[*body] * local - posed;
-                let press = m.dot(inward);
-                (press, (m - inward * press).norm(), m)
+            .map(|c| {
+                let m = fk.body_poses[c.body] * c.local - c.posed;
+                let press = m.dot(&c.inward);
+                (press, (m - c.inward * press).norm(), m)
             })
             .collect())
     }
@@ -185,8 +199,8 @@ fn limit_slide(
     contacts: &[SweepContact],
     q: Vec<f64>,
     max_slide: f64,
-) -> Result<(Vec<f64>, Vec<(f64, f64, Vector3<f64>)>), FieldError> {
-    let slide = |t: &[(f64, f64, Vector3<f64>)]| t.iter().map(|&(_, s, _)| s).fold(0.0, f64::max);
+) -> Result<(Vec<f64>, Vec<Travel>), FieldError> {
+    let slide = |t: &[Travel]| t.iter().map(|&(_, s, _)| s).fold(0.0, f64::max);
     let travel = travels.to(&q)?;
     if slide(&travel) <= max_slide {
         return Ok((q, travel));
