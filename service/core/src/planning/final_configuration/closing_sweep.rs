@@ -7,9 +7,9 @@
 //! into the object is the group's `push`.
 //!
 //! Steps of 1/[`STEPS`] of the path, refined by [`BISECTIONS`] halvings at each first touch (of
-//! the fingers that touch at the whole step); a link touches when an object point is within [`TOUCH_MARGIN`] of it. The table does not stop a
-//! finger (fingertips slide along it, as they do on a real table); where the closed hand ends
-//! up below it, the caller raises the hand.
+//! the fingers that touch at the whole step); a link touches when an object point is within
+//! [`TOUCH_MARGIN`] of it. The table does not stop a finger (fingertips slide along it, as they
+//! do on a real table); where the closed hand ends up below it, the caller raises the hand.
 
 use super::ObjectView;
 use super::object_view::NearPoints;
