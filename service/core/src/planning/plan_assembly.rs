@@ -256,10 +256,7 @@ fn plan_of_final(
     let cps: Vec<ContactPoint> = fc
         .contacts
         .iter()
-        .map(|c| ContactPoint {
-            position: c.position,
-            normal: c.normal,
-        })
+        .map(|c| ContactPoint::new(c.position, c.normal))
         .collect();
     let epsilon = ferrari_canny(
         &cps,

@@ -55,7 +55,9 @@ use super::search_context::{PLANE_TOLERANCE, SearchContext};
 use crate::error::FieldError;
 use crate::hand::kinematics::PreShape;
 use closing_sweep::{SweepContact, SweepHand, close_fingers};
-use contacts::{outside_friction_cone, palm_contacts, unlinked_fingers, unlinked_pair};
+use contacts::{
+    contact_grips, outside_friction_cone, palm_contacts, unlinked_fingers, unlinked_pair,
+};
 use grip::{Pending, grip};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 pub use object_view::{COLLISION_CELL, ObjectView};
@@ -108,6 +110,8 @@ pub struct FinalConfiguration {
     pub grasp: Vec<f64>,
     pub squeeze: Vec<f64>,
     pub contacts: Vec<SweepContact>,
+    /// Per contact, its grip in fingertip grips (`super::robustness::contact_grip`).
+    grips: Vec<f64>,
     /// Per contact, whether the squeeze drives it off the object (`squeeze::Squeeze`); empty
     /// until the squeeze is computed.
     sliding: Vec<bool>,
@@ -149,9 +153,10 @@ impl FinalConfiguration {
             .filter(|(i, c)| {
                 c.coherence >= EDGE_COHERENCE && !self.sliding.get(*i).copied().unwrap_or(false)
             })
-            .map(|(_, c)| ContactPoint {
+            .map(|(i, c)| ContactPoint {
                 position: c.position,
                 normal: c.normal,
+                grip: self.grips.get(i).copied().unwrap_or(1.0),
             })
             .collect()
     }
@@ -587,12 +592,10 @@ fn judge_with(
     };
     let mut contacts = closed.contacts.clone();
     contacts.extend(palm_contacts(model, &sweep, &closed.joints, object)?);
+    let grips = contact_grips(model, &closed.joints, &root, &contacts)?;
     let cps: Vec<ContactPoint> = contacts
         .iter()
-        .map(|c| ContactPoint {
-            position: c.position,
-            normal: c.normal,
-        })
+        .map(|c| ContactPoint::new(c.position, c.normal))
         .collect();
     let gii = if cps.len() >= 2 {
         quality::gii(&cps, ctx.options.torsion_gamma)
@@ -688,6 +691,7 @@ fn judge_with(
         grasp: closed.joints,
         squeeze,
         contacts,
+        grips,
         sliding,
         gii,
         robustness: Robustness::default(),
