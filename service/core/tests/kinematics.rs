@@ -356,41 +356,6 @@ fn inverse_contacts_reports_each_contact() {
     assert_eq!(e.field, "contacts[2].finger");
 }
 
-/// Joint efforts from the actuators, as read off each file: the Shadow's class defaults
-/// (`right_hand` sets ±1, `thbase` ±3, `thproximal` ±2, the wrist ±10 and ±5) and its tendon
-/// actuators on the coupled J1/J2 (coef 1), the Barrett's ±3 per joint, the 2F-85's ±5 on a
-/// tendon split 0.5/0.5 over its drivers (its linkage is passive), the Allegro's unlimited
-/// position servos.
-#[test]
-fn joint_efforts_come_from_the_actuators() {
-    let effort = |file: &str, joint: &str| {
-        let t = load(file);
-        let j = t.joint_index(joint).unwrap_or_else(|| panic!("{joint}"));
-        t.joints[j].effort
-    };
-    let shadow = SHARED_HANDS[0].0;
-    for (j, e) in [
-        ("rh_FFJ3", 1.0),
-        ("rh_FFJ2", 1.0),
-        ("rh_FFJ1", 1.0),
-        ("rh_THJ5", 3.0),
-        ("rh_THJ4", 2.0),
-        ("rh_WRJ2", 10.0),
-        ("rh_WRJ1", 5.0),
-    ] {
-        assert_eq!(effort(shadow, j), Some(e), "{j}");
-    }
-    assert_eq!(
-        effort(SHARED_HANDS[3].0, "wam/bhand/index/med_joint"),
-        Some(3.0)
-    );
-    let robotiq = SHARED_HANDS[2].0;
-    assert_eq!(effort(robotiq, "left_driver_joint"), Some(2.5));
-    assert_eq!(effort(robotiq, "left_follower_joint"), None);
-    let allegro = load(SHARED_HANDS[1].0);
-    assert!(allegro.joints.iter().all(|j| j.effort.is_none()));
-}
-
 /// The Robotiq 2F-85's linkage: the coupler chains are not fingers, the closures hold after
 /// projection, and random independent joint values violate them.
 #[test]

@@ -298,7 +298,10 @@ mod tests {
     }
 
     fn c(p: [f64; 3], n: [f64; 3]) -> ContactPoint {
-        ContactPoint::new(Point3::from(p), Vector3::from(n).normalize())
+        ContactPoint {
+            position: Point3::from(p),
+            normal: Vector3::from(n).normalize(),
+        }
     }
 
     #[test]

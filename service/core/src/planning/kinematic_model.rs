@@ -17,10 +17,6 @@ pub struct KinematicModel {
     pub synergy: HandSynergy,
     /// The pre-shape of each way the hand realises a grasp type (kinematic finger indices).
     pub pre_shapes: Vec<PreShapeEntry>,
-    /// The force a typical fingertip presses with, N (`KinematicHand::fingertip_grip`); the
-    /// unit of the robustness figure's contact grips. None when the actuators' limits are not
-    /// modelled.
-    pub fingertip_grip: Option<f64>,
 }
 
 /// The pre-shapes of one grasp realisation: fingers h1 (empty: the palm) against h2, the best
@@ -56,7 +52,6 @@ impl KinematicModel {
             }
         }
         Ok(Self {
-            fingertip_grip: hand.fingertip_grip(),
             hand,
             collision,
             synergy,

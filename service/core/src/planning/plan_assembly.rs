@@ -256,7 +256,10 @@ fn plan_of_final(
     let cps: Vec<ContactPoint> = fc
         .contacts
         .iter()
-        .map(|c| ContactPoint::new(c.position, c.normal))
+        .map(|c| ContactPoint {
+            position: c.position,
+            normal: c.normal,
+        })
         .collect();
     let epsilon = ferrari_canny(
         &cps,

@@ -8,20 +8,6 @@ use nalgebra::{Matrix6, Point3, Vector3, Vector6};
 pub struct ContactPoint {
     pub position: Point3<f64>,
     pub normal: Vector3<f64>,
-    /// The largest normal force it presses with, in fingertip grips (`super::robustness`; 1
-    /// where the hand's strength is unknown). Only the robustness figure reads it.
-    pub grip: f64,
-}
-
-impl ContactPoint {
-    /// A contact of one fingertip grip.
-    pub fn new(position: Point3<f64>, normal: Vector3<f64>) -> Self {
-        Self {
-            position,
-            normal,
-            grip: 1.0,
-        }
-    }
 }
 
 pub use crate::cloud::tangents;
@@ -177,7 +163,10 @@ mod tests {
     use std::f64::consts::{FRAC_PI_2, FRAC_PI_3, FRAC_PI_4, PI};
 
     fn c(p: [f64; 3], n: [f64; 3]) -> ContactPoint {
-        ContactPoint::new(Point3::from(p), Vector3::from(n).normalize())
+        ContactPoint {
+            position: Point3::from(p),
+            normal: Vector3::from(n).normalize(),
+        }
     }
 
     #[test]

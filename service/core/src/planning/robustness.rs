@@ -3,10 +3,9 @@
 //! axis directions ±x, ±y, ±z of the planning frame (gravity along any of them, as DexGraspBench's
 //! force-closure test applies it) and straight down (gravity as it is).
 //!
-//! Model: every contact pushes with a normal force of at most its grip (`ContactPoint::grip`: the
-//! unit is a typical fingertip's grip force, so the figure reads "this many fingertips' grip
-//! forces"; a contact the hand's actuators hold harder counts more, [`contact_grip`]), its
-//! tangential force inside a friction cone linearised by [`CONE_EDGES`] inscribed edges (μ cos(π/edges)), and, as a
+//! Model: every contact pushes with a normal force of at most 1 (the unit is the grip force of
+//! one contact, so the figure reads "this many contacts' grip forces"), its tangential force
+//! inside a friction cone linearised by [`CONE_EDGES`] inscribed edges (μ cos(π/edges)), and, as a
 //! soft finger, a torsional moment of at most μ·r_patch times its normal force. The contacts must
 //! produce −t·d and no moment about the centre of mass; t is maximised by a linear program
 //! (microlp). Moments are divided by the object radius ρ only to condition the program.
@@ -15,33 +14,11 @@
 //! the mass is and how much friction the contacts can call on.
 
 use super::quality::{ContactPoint, tangents};
-use crate::hand::kinematics::GripCapacity;
 use microlp::{ComparisonOp, OptimizationDirection, Problem};
 use nalgebra::{Point3, Vector3};
 
 /// Edges of the linearised friction cone.
 pub const CONE_EDGES: usize = 6;
-/// Most a contact's grip counts for, in fingertip grips: a link the actuators could hold far
-/// harder than a fingertip (a proximal phalanx by its knuckle, a palm backed by the arm) is
-/// still pressed only by the close, which asks every finger for a similar grip.
-pub const GRIP_MAX: f64 = 3.0;
-/// Least a contact's grip counts for, in fingertip grips (a fingertip at the end of a long,
-/// weak finger still holds some of the object).
-pub const GRIP_MIN: f64 = 0.25;
-
-/// A contact's grip (`ContactPoint::grip`) from the capacity of the hand at it
-/// ([`crate::hand::kinematics::KinematicHand::grip_capacity`]) and the hand's fingertip grip
-/// (`fingertip_grip`): their ratio within [`GRIP_MIN`, `GRIP_MAX`]; a point no joint moves (the
-/// palm of a hand without a wrist) [`GRIP_MAX`]; 1 where either is unknown (a hand whose
-/// actuators' limits are not modelled counts every contact alike).
-pub fn contact_grip(capacity: GripCapacity, fingertip: Option<f64>) -> f64 {
-    match (capacity, fingertip) {
-        (_, None) => 1.0,
-        (GripCapacity::Limited(c), Some(f)) if f > 0.0 => (c / f).clamp(GRIP_MIN, GRIP_MAX),
-        (GripCapacity::Fixed, Some(_)) => GRIP_MAX,
-        _ => 1.0,
-    }
-}
 
 /// The six axis directions and gravity.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -171,8 +148,8 @@ pub fn resisted_force(
             }
             normal_sum.push((v, 1.0));
         }
-        // Normal force ≤ the contact's grip.
-        lp.add_constraint(normal_sum.as_slice(), ComparisonOp::Le, c.grip.max(0.0));
+        // Normal force ≤ 1.
+        lp.add_constraint(normal_sum.as_slice(), ComparisonOp::Le, 1.0);
         // Torsion ±, bounded by μ·r_patch times the normal force.
         let tp = lp.add_var(0.0, (0.0, f64::INFINITY));
         let tm = lp.add_var(0.0, (0.0, f64::INFINITY));
@@ -206,10 +183,10 @@ mod tests {
     }
 
     fn contact(p: [f64; 3], n: [f64; 3]) -> ContactPoint {
-        ContactPoint::new(
-            Point3::new(p[0], p[1], p[2]),
-            Vector3::new(n[0], n[1], n[2]).normalize(),
-        )
+        ContactPoint {
+            position: Point3::new(p[0], p[1], p[2]),
+            normal: Vector3::new(n[0], n[1], n[2]).normalize(),
+        }
     }
 
     /// Two antipodal contacts on x through the centre of mass, μ = 0.6, 6 edges: along ±x one
@@ -234,36 +211,6 @@ mod tests {
         }
         assert!((r.gravity - r.axes[5]).abs() < 1e-9);
         assert!((r.weakest - r.axes.iter().copied().fold(f64::INFINITY, f64::min)).abs() < 1e-12);
-    }
-
-    /// A contact that grips twice as hard resists twice the force it alone pushes against;
-    /// one at a quarter, a quarter (along ±x each contact alone holds the object).
-    #[test]
-    fn a_contacts_grip_bounds_its_push() {
-        let mut c = pinch_at(0.0);
-        c[0].grip = 2.0;
-        c[1].grip = 0.25;
-        let r = robustness(&c, &Point3::origin(), 0.03, 0.6, 0.01, None);
-        let mut x = [r.axes[0], r.axes[1]];
-        x.sort_by(f64::total_cmp);
-        assert!(
-            (x[0] - 0.25).abs() < 1e-6 && (x[1] - 2.0).abs() < 1e-6,
-            "{x:?}"
-        );
-    }
-
-    /// Grips from capacities: the ratio to the fingertip grip within its bounds, a fixed palm
-    /// at the most, 1 where the strength is unknown.
-    #[test]
-    fn grips_are_capacities_over_the_fingertip_grip() {
-        let tip = Some(10.0);
-        assert_eq!(contact_grip(GripCapacity::Limited(20.0), tip), 2.0);
-        assert_eq!(contact_grip(GripCapacity::Limited(100.0), tip), GRIP_MAX);
-        assert_eq!(contact_grip(GripCapacity::Limited(1.0), tip), GRIP_MIN);
-        assert_eq!(contact_grip(GripCapacity::Fixed, tip), GRIP_MAX);
-        assert_eq!(contact_grip(GripCapacity::Unknown, tip), 1.0);
-        assert_eq!(contact_grip(GripCapacity::Limited(20.0), None), 1.0);
-        assert_eq!(contact_grip(GripCapacity::Fixed, None), 1.0);
     }
 
     /// Stopped early: with a floor of 1.5 the first axis (+x, where one contact pushes with its

@@ -105,7 +105,10 @@ pub const PATCH_RADIUS: f64 = 0.01;
 
 impl SearchContext<'_> {
     pub fn contact(&self, i: usize) -> ContactPoint {
-        ContactPoint::new(self.points[i], self.normals.get(i))
+        ContactPoint {
+            position: self.points[i],
+            normal: self.normals.get(i),
+        }
     }
 
     pub fn palm_opposition(&self) -> bool {

@@ -41,10 +41,6 @@ pub struct Joint {
     pub range: Option<(f64, f64)>,
     /// The joint value at which the body sits at its modelled pose (MJCF `ref`, else 0).
     pub reference: f64,
-    /// The largest torque (hinge, N·m) or force (slide, N) the hand's actuators put on this
-    /// joint (MJCF actuators' `forcerange` through their transmission, URDF `<limit effort>`);
-    /// `None` when unknown or unlimited.
-    pub effort: Option<f64>,
 }
 
 impl Joint {

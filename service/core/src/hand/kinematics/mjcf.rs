@@ -14,11 +14,7 @@
 //! - `<mesh file scale>` assets: every mesh file must exist; collision meshes are loaded;
 //! - `<equality><connect|weld body1 body2>` as loop closures.
 //!
-//! - `<actuator>` and fixed `<tendon>`s: only for each joint's effort limit ([`actuators`]).
-//!
-//! Inertial, sensor and contact sections are not kinematics and are ignored.
-
-mod actuators;
+//! Inertial, actuator, tendon, sensor and contact sections are not kinematics and are ignored.
 
 use super::kinematic_tree::{
     Body, Geom, GeomShape, Joint, JointCoupling, JointKind, KinematicTree, LoopClosure, Site,
@@ -96,12 +92,6 @@ pub fn parse_mjcf(text: &str, model_dir: &Path, source: &str) -> Result<Kinemati
             reader.equality(c)?;
         }
     }
-    actuators::read_efforts(
-        &root,
-        &reader.defaults,
-        reader.compiler.autolimits,
-        &mut reader.tree,
-    )?;
     reader.tree.validate(FIELD)?;
     Ok(reader.tree)
 }
@@ -630,16 +620,6 @@ impl Reader {
                     .map_err(|_| err(el, format!("ref='{s}' must be a number")))?,
             ),
         };
-        // The joint's own clamp on its actuators' total (MuJoCo 3 `actuatorfrcrange`); the
-        // actuators' own limits are added by `actuators::read_efforts`.
-        let frc_limited = match a.get("actuatorfrclimited").unwrap_or("auto") {
-            "auto" => a.get("actuatorfrcrange").is_some() && self.compiler.autolimits,
-            s => parse_bool(el, "actuatorfrclimited", s)?,
-        };
-        let effort = match a.numbers("actuatorfrcrange", 2)? {
-            Some(v) if frc_limited => Some(v[0].abs().max(v[1].abs())),
-            _ => None,
-        };
         let index = self.tree.joints.len();
         self.tree.joints.push(Joint {
             name,
@@ -649,7 +629,6 @@ impl Reader {
             axis,
             range: if limited { range } else { None },
             reference,
-            effort,
         });
         self.tree.bodies[body].joints.push(index);
         Ok(())

@@ -18,7 +18,6 @@ pub mod collision_model;
 pub mod convex_faces;
 pub mod describe;
 pub mod forward_kinematics;
-pub mod grip_capacity;
 pub mod hand_model;
 pub mod inverse_kinematics;
 pub mod kinematic_tree;
@@ -30,7 +29,6 @@ mod xml;
 pub use closing::{FingerSynergy, FlexionJoint, HandSynergy, PreShape};
 pub use collision_model::{CollisionPiece, HandCollision, PosedCollision};
 pub use forward_kinematics::ForwardKinematics;
-pub use grip_capacity::GripCapacity;
 pub use hand_model::{HandOverrides, KinematicFinger, KinematicHand};
 pub use inverse_kinematics::{ContactTarget, FingerIk, HandIk, IkOptions, PalmFreedom, PalmIk};
 pub use kinematic_tree::{

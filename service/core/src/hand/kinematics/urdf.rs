@@ -69,7 +69,6 @@ pub fn parse_urdf(text: &str, mesh_dir: &Path, source: &str) -> Result<Kinematic
         kind: Option<JointKind>,
         axis: Unit<Vector3<f64>>,
         range: Option<(f64, f64)>,
-        effort: Option<f64>,
     }
     let mut joints: Vec<UrdfJoint> = Vec::new();
     let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
@@ -185,14 +184,6 @@ pub fn parse_urdf(text: &str, mesh_dir: &Path, source: &str) -> Result<Kinematic
         } else {
             None
         };
-        // `<limit effort>`: what the joint's actuator exerts at most (N·m or N); 0, absent or
-        // unreadable leaves it unknown (URDF writers put 0 for "not modelled").
-        let effort = j
-            .children_named("limit")
-            .next()
-            .and_then(|l| l.attr("effort"))
-            .and_then(|s| s.trim().parse::<f64>().ok())
-            .filter(|e| e.is_finite() && *e > 0.0);
         parent_joint[child] = Some(joints.len());
         joints.push(UrdfJoint {
             name,
@@ -202,7 +193,6 @@ pub fn parse_urdf(text: &str, mesh_dir: &Path, source: &str) -> Result<Kinematic
             kind,
             axis,
             range,
-            effort,
         });
     }
     let roots: Vec<usize> = (0..links.len())
@@ -306,7 +296,6 @@ pub fn parse_urdf(text: &str, mesh_dir: &Path, source: &str) -> Result<Kinematic
             axis: j.axis,
             range: j.range,
             reference: 0.0,
-            effort: j.effort,
         });
         tree.bodies[body].joints.push(index);
     }

@@ -6,8 +6,6 @@ use super::closing_sweep::{SweepContact, SweepHand, patch};
 use super::object_view::NearPoints;
 use crate::error::FieldError;
 use crate::planning::kinematic_model::KinematicModel;
-use crate::planning::robustness::contact_grip;
-use nalgebra::Isometry3;
 
 /// For exactly two contacts, which of them (first, second) the line between them leaves the
 /// friction cone of: two contacts hold only along a line inside both cones (Nguyen's
@@ -94,29 +92,6 @@ pub(super) fn palm_contacts(
         }
     }
     Ok(out)
-}
-
-/// Each contact's grip at the grasp joints `q`, the model's root at `root` in the world
-/// (`crate::planning::robustness::contact_grip`): how hard the hand's actuators can press there,
-/// in fingertip grips.
-pub(super) fn contact_grips(
-    model: &KinematicModel,
-    q: &[f64],
-    root: &Isometry3<f64>,
-    contacts: &[SweepContact],
-) -> Result<Vec<f64>, FieldError> {
-    let Some(tip) = model.fingertip_grip else {
-        return Ok(vec![1.0; contacts.len()]);
-    };
-    let fk = model.hand.tree.forward(q)?;
-    let to_model = root.inverse();
-    Ok(contacts
-        .iter()
-        .map(|c| {
-            let at = to_model * c.position;
-            contact_grip(model.hand.grip_capacity(&fk, c.body, &at), Some(tip))
-        })
-        .collect())
 }
 
 #[cfg(test)]

@@ -55,9 +55,7 @@ use super::search_context::{PLANE_TOLERANCE, SearchContext};
 use crate::error::FieldError;
 use crate::hand::kinematics::PreShape;
 use closing_sweep::{SweepContact, SweepHand, close_fingers};
-use contacts::{
-    contact_grips, outside_friction_cone, palm_contacts, unlinked_fingers, unlinked_pair,
-};
+use contacts::{outside_friction_cone, palm_contacts, unlinked_fingers, unlinked_pair};
 use grip::{Pending, grip};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 pub use object_view::{COLLISION_CELL, ObjectView};
@@ -110,8 +108,6 @@ pub struct FinalConfiguration {
     pub grasp: Vec<f64>,
     pub squeeze: Vec<f64>,
     pub contacts: Vec<SweepContact>,
-    /// Per contact, its grip in fingertip grips (`super::robustness::contact_grip`).
-    grips: Vec<f64>,
     /// Per contact, whether the squeeze drives it off the object (`squeeze::Squeeze`); empty
     /// until the squeeze is computed.
     sliding: Vec<bool>,
@@ -153,10 +149,9 @@ impl FinalConfiguration {
             .filter(|(i, c)| {
                 c.coherence >= EDGE_COHERENCE && !self.sliding.get(*i).copied().unwrap_or(false)
             })
-            .map(|(i, c)| ContactPoint {
+            .map(|(_, c)| ContactPoint {
                 position: c.position,
                 normal: c.normal,
-                grip: self.grips.get(i).copied().unwrap_or(1.0),
             })
             .collect()
     }
@@ -592,10 +587,12 @@ fn judge_with(
     };
     let mut contacts = closed.contacts.clone();
     contacts.extend(palm_contacts(model, &sweep, &closed.joints, object)?);
-    let grips = contact_grips(model, &closed.joints, &root, &contacts)?;
     let cps: Vec<ContactPoint> = contacts
         .iter()
-        .map(|c| ContactPoint::new(c.position, c.normal))
+        .map(|c| ContactPoint {
+            position: c.position,
+            normal: c.normal,
+        })
         .collect();
     let gii = if cps.len() >= 2 {
         quality::gii(&cps, ctx.options.torsion_gamma)
@@ -691,7 +688,6 @@ fn judge_with(
         grasp: closed.joints,
         squeeze,
         contacts,
-        grips,
         sliding,
         gii,
         robustness: Robustness::default(),
