@@ -8,6 +8,7 @@ use crate::ops::Tokens;
 use crate::tls::TlsFiles;
 use clap::{Parser, ValueEnum};
 use graspd_core::cloud::MIN_POINTS;
+use graspd_core::planning::MAX_ITERATIONS;
 use serde::{Deserialize, Serialize};
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -70,6 +71,10 @@ pub struct Cli {
     /// Most further RGB-D views (`extra_views`) fused into one plan request [default: 8].
     #[arg(long, env = "GRASPD_MAX_VIEWS", value_name = "N")]
     pub max_views: Option<usize>,
+    /// Most stage-1 iterations a plan request may ask for (`options.max_iterations`), what one
+    /// plan may cost in CPU [default: 100000; at most 10000000].
+    #[arg(long, env = "GRASPD_MAX_ITERATIONS", value_name = "N")]
+    pub max_iterations: Option<usize>,
     /// The grasp-type network (ONNX, docs/model-contract.md) for RGB-D input [default: the copy
     /// of models/grasp_type/grasp_type.onnx built into graspd; if it cannot be loaded (no ONNX
     /// Runtime) graspd warns and the geometric rule decides types]. `none`: no model. A given
@@ -142,6 +147,7 @@ pub struct FileConfig {
     pub max_tactile_sessions: Option<usize>,
     pub max_image_pixels: Option<usize>,
     pub max_views: Option<usize>,
+    pub max_iterations: Option<usize>,
     /// Bearer tokens, as `--auth-token`.
     #[serde(default)]
     pub auth_tokens: Vec<String>,
@@ -174,6 +180,7 @@ pub struct Settings {
     pub max_tactile_sessions: usize,
     pub max_image_pixels: usize,
     pub max_views: usize,
+    pub max_iterations: usize,
     /// Never printed: `--print-config` shows their count in a comment.
     #[serde(skip)]
     pub auth_tokens: Tokens,
@@ -294,6 +301,10 @@ impl Settings {
                 .or(file.max_image_pixels)
                 .unwrap_or(d.max_image_pixels),
             max_views: cli.max_views.or(file.max_views).unwrap_or(d.max_views),
+            max_iterations: cli
+                .max_iterations
+                .or(file.max_iterations)
+                .unwrap_or(d.max_iterations),
             auth_tokens,
             auth_tokens_file,
             grasp_type_model: cli.grasp_type_model.clone().or(file.grasp_type_model),
@@ -361,6 +372,15 @@ impl Settings {
             return Err(ConfigError::Invalid {
                 field: "max_views",
                 message: format!("must be at most 64, got {}", self.max_views),
+            });
+        }
+        if self.max_iterations == 0 || self.max_iterations > MAX_ITERATIONS {
+            return Err(ConfigError::Invalid {
+                field: "max_iterations",
+                message: format!(
+                    "must be within 1..={MAX_ITERATIONS}, got {}",
+                    self.max_iterations
+                ),
             });
         }
         if self.model_threads == 0 || self.model_threads > 64 {
@@ -448,6 +468,7 @@ impl Settings {
             max_tactile_sessions: self.max_tactile_sessions,
             max_image_pixels: self.max_image_pixels,
             max_views: self.max_views,
+            max_iterations: self.max_iterations,
         }
     }
 }
@@ -514,6 +535,27 @@ mod tests {
             Err(ConfigError::Parse { .. })
         ));
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// The iteration limit reaches the facade's limits; beyond the planner's own bound (or 0)
+    /// it stops the start naming the setting.
+    #[test]
+    fn the_iteration_limit_is_a_setting() {
+        let s = Settings::resolve(&cli(&["--max-iterations", "250000"])).unwrap();
+        assert_eq!(s.limits().max_iterations, 250_000);
+        assert_eq!(
+            Settings::resolve(&cli(&[]))
+                .unwrap()
+                .limits()
+                .max_iterations,
+            crate::facade::DEFAULT_MAX_ITERATIONS
+        );
+        for bad in ["0", "20000000"] {
+            match Settings::resolve(&cli(&["--max-iterations", bad])) {
+                Err(ConfigError::Invalid { field, .. }) => assert_eq!(field, "max_iterations"),
+                other => panic!("{bad}: {other:?}"),
+            }
+        }
     }
 
     #[test]

@@ -45,6 +45,29 @@ pub struct Limits {
     pub max_image_pixels: usize,
     /// Most further views (`extra_views`) fused into one plan request.
     pub max_views: usize,
+    /// Most stage-1 iterations a request may ask for (`options.max_iterations`): what one plan
+    /// may cost in CPU. Within the planner's own bound, [`graspd_core::planning::MAX_ITERATIONS`].
+    pub max_iterations: usize,
+}
+
+/// Default of [`Limits::max_iterations`].
+pub const DEFAULT_MAX_ITERATIONS: usize = 100_000;
+
+impl Limits {
+    /// The limits' share of the options' rules (their ranges are
+    /// `PlannerOptions::validate`'s): how much CPU one request may ask for.
+    pub fn check_options(&self, o: &PlannerOptions) -> Result<(), FieldError> {
+        if o.max_iterations > self.max_iterations {
+            return Err(FieldError::new(
+                "options.max_iterations",
+                format!(
+                    "must be at most {}, this server's limit (max_iterations), got {}",
+                    self.max_iterations, o.max_iterations
+                ),
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// Default of [`Limits::max_views`].
@@ -70,6 +93,7 @@ impl Default for Limits {
             max_tactile_sessions: DEFAULT_MAX_TACTILE_SESSIONS,
             max_image_pixels: RgbdLimits::default().max_pixels,
             max_views: DEFAULT_MAX_VIEWS,
+            max_iterations: DEFAULT_MAX_ITERATIONS,
         }
     }
 }
@@ -543,25 +567,13 @@ impl GraspService {
     pub fn plan(&self, request: PlanRequest) -> Result<GraspPlan, ServiceError> {
         let output = request.output;
         let (input, perceived) = self.prepare_with_perception(request)?;
-        match catch_unwind(AssertUnwindSafe(|| {
-            let mut plan = graspd_core::plan(input)?;
+        guarded("the planner", || {
+            let mut plan = graspd_core::plan(input).map_err(ServiceError::from)?;
             if let Some(p) = perceived {
                 p.attach(&mut plan, &output);
             }
-            Ok::<_, PlanError>(plan)
-        })) {
-            Ok(result) => result.map_err(ServiceError::from),
-            Err(panic) => {
-                let what = panic
-                    .downcast_ref::<String>()
-                    .map(String::as_str)
-                    .or_else(|| panic.downcast_ref::<&str>().copied())
-                    .unwrap_or("unknown panic");
-                Err(ServiceError::Internal(format!(
-                    "the planner failed: {what}"
-                )))
-            }
-        }
+            Ok(plan)
+        })
     }
 
     /// Checks a request against the catalog and the limits and turns it into planner input.
@@ -580,7 +592,8 @@ impl GraspService {
     ) -> Result<(PlanInput, Option<Perceived>), ServiceError> {
         let (hand, kinematics) = self.choose_hand(request.hand)?;
         let mut hints = validate_hints(request.hints, &hand)?;
-        validate_options(&request.options)?;
+        request.options.validate()?;
+        self.inner.limits.check_options(&request.options)?;
         let max_views = self.inner.limits.max_views;
         if request.extra_views.len() > max_views {
             return Err(ServiceError::TooLarge(FieldError::new(
@@ -1110,115 +1123,6 @@ fn validate_hints(mut hints: PlanHints, hand: &HandDescription) -> Result<PlanHi
     Ok(hints)
 }
 
-fn check(ok: bool, field: &str, message: impl Into<String>) -> Result<(), FieldError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(FieldError::new(format!("options.{field}"), message))
-    }
-}
-
-fn in_range(v: f64, lo: f64, hi: f64, field: &str) -> Result<(), FieldError> {
-    check(
-        v.is_finite() && (lo..=hi).contains(&v),
-        field,
-        format!("must be in [{lo}, {hi}], got {v}"),
-    )
-}
-
-/// Bounds that keep one request from running away with the CPU or producing nonsense.
-pub const MAX_ITERATIONS_LIMIT: usize = 100_000;
-pub const MAX_CANDIDATES_LIMIT: usize = 100_000;
-
-fn validate_options(o: &PlannerOptions) -> Result<(), FieldError> {
-    in_range(o.epsilon, 0.0, 1.0, "epsilon")?;
-    check(
-        o.friction.is_finite() && o.friction > 0.0 && o.friction <= 10.0,
-        "friction",
-        format!("must be in (0, 10], got {}", o.friction),
-    )?;
-    in_range(o.torsion_gamma, 0.0, 100.0, "torsion_gamma")?;
-    for (name, w) in [
-        ("stage1_weights", o.stage1_weights),
-        ("stage2_weights", o.stage2_weights),
-    ] {
-        check(
-            w.iter().all(|v| v.is_finite() && *v >= 0.0) && w.iter().sum::<f64>() > 0.0,
-            name,
-            format!("must be two finite non-negative weights, not both zero, got {w:?}"),
-        )?;
-    }
-    check(
-        o.iteration_fraction.is_finite()
-            && o.iteration_fraction > 0.0
-            && o.iteration_fraction <= 1.0,
-        "iteration_fraction",
-        format!("must be in (0, 1], got {}", o.iteration_fraction),
-    )?;
-    check(
-        o.max_iterations >= 1 && o.max_iterations <= MAX_ITERATIONS_LIMIT,
-        "max_iterations",
-        format!(
-            "must be in [1, {MAX_ITERATIONS_LIMIT}], got {}",
-            o.max_iterations
-        ),
-    )?;
-    check(
-        o.min_iterations <= o.max_iterations,
-        "min_iterations",
-        format!(
-            "must not exceed max_iterations ({}), got {}",
-            o.max_iterations, o.min_iterations
-        ),
-    )?;
-    check(
-        o.patience >= 1,
-        "patience",
-        "must be at least 1".to_string(),
-    )?;
-    check(
-        o.restarts <= 10,
-        "restarts",
-        format!("must be at most 10, got {}", o.restarts),
-    )?;
-    for (name, v) in [("lambda1", o.lambda1), ("lambda2", o.lambda2)] {
-        if let Some(v) = v {
-            check(
-                v.is_finite() && v > 0.0 && v <= 1.0,
-                name,
-                format!("must be a radius in (0, 1] m, got {v}"),
-            )?;
-        }
-    }
-    for (name, v) in [
-        ("opposition_candidates", o.opposition_candidates),
-        ("contact_candidates", o.contact_candidates),
-    ] {
-        check(
-            (1..=MAX_CANDIDATES_LIMIT).contains(&v),
-            name,
-            format!("must be in [1, {MAX_CANDIDATES_LIMIT}], got {v}"),
-        )?;
-    }
-    check(
-        (3..=100).contains(&o.normals_k),
-        "normals_k",
-        format!("must be in [3, 100], got {}", o.normals_k),
-    )?;
-    in_range(o.pregrasp_distance, 0.0, 1.0, "pregrasp_distance")?;
-    check(
-        (3..=64).contains(&o.friction_cone_edges),
-        "friction_cone_edges",
-        format!("must be in [3, 64], got {}", o.friction_cone_edges),
-    )?;
-    check(
-        o.max_center_offset.is_finite() && o.max_center_offset > 0.0 && o.max_center_offset <= 10.0,
-        "max_center_offset",
-        format!("must be in (0, 10], got {}", o.max_center_offset),
-    )?;
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1285,6 +1189,14 @@ mod tests {
         r.options.max_iterations = 10_000_000;
         assert_eq!(field_of(s.prepare(r)), "options.max_iterations");
 
+        // The planner's ranges are the edge's: μ = 7 is refused here, before any planning.
+        let mut r = request("shadow");
+        r.options.friction = 7.0;
+        assert_eq!(field_of(s.prepare(r)), "options.friction");
+        let mut r = request("shadow");
+        r.options.opposition_candidates = 4;
+        assert_eq!(field_of(s.prepare(r)), "options.opposition_candidates");
+
         let mut r = request("shadow");
         r.hints.support_plane = Some(Plane {
             normal: Vector3::zeros(),
@@ -1300,6 +1212,24 @@ mod tests {
             field_of(s.prepare(r)),
             "hand_description.geometry.max_aperture"
         );
+    }
+
+    /// `max_iterations` is the server's limit: a request within the planner's range but above
+    /// the configured limit is refused naming it, and a server configured higher accepts it.
+    #[test]
+    fn the_iteration_limit_is_configurable() {
+        let mut r = request("shadow");
+        r.options.max_iterations = 200_000;
+        let e = GraspService::builtin(Limits::default())
+            .prepare(r.clone())
+            .unwrap_err();
+        assert_eq!(e.field(), Some("options.max_iterations"));
+        assert!(e.to_string().contains("100000"), "{e}");
+        let s = GraspService::builtin(Limits {
+            max_iterations: 500_000,
+            ..Limits::default()
+        });
+        assert!(s.prepare(r).is_ok());
     }
 
     #[test]

@@ -23,5 +23,5 @@ pub mod type_rule;
 pub mod types;
 
 pub use kinematic_model::KinematicModel;
-pub use planner::{PlanInput, plan};
+pub use planner::{MAX_ITERATIONS, PlanInput, plan};
 pub use types::*;

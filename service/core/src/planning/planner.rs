@@ -50,8 +50,23 @@ fn check_range(field: &str, v: f64, lo: f64, hi: f64) -> Result<(), FieldError> 
     Ok(())
 }
 
+fn check_count(field: &str, v: usize, lo: usize, hi: usize) -> Result<(), FieldError> {
+    if v < lo || v > hi {
+        return Err(FieldError::new(
+            format!("options.{field}"),
+            format!("must be within [{lo}, {hi}], got {v}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Most stage-1 iterations an options set may ask for (a server caps it lower, per its
+/// configured limits).
+pub const MAX_ITERATIONS: usize = 10_000_000;
+
 impl PlannerOptions {
-    /// Checks every option's range; errors name `options.<field>`.
+    /// Checks every option's range — the one home of the option bounds: the service's edge
+    /// and the planner both call it; errors name `options.<field>`.
     pub fn validate(&self) -> Result<(), FieldError> {
         check_range("epsilon", self.epsilon, 0.0, 1.0)?;
         check_range("friction", self.friction, 0.01, 5.0)?;
@@ -60,39 +75,44 @@ impl PlannerOptions {
             ("stage1_weights", self.stage1_weights),
             ("stage2_weights", self.stage2_weights),
         ] {
-            for v in w {
-                check_range(name, v, -100.0, 100.0)?;
+            // Both terms of the objective count for or against nothing when negative, and
+            // all-zero weights leave nothing to maximise.
+            if !w.iter().all(|v| v.is_finite() && (0.0..=100.0).contains(v))
+                || w.iter().sum::<f64>() <= 0.0
+            {
+                return Err(FieldError::new(
+                    format!("options.{name}"),
+                    format!("must be two weights within [0, 100], not both zero, got {w:?}"),
+                ));
             }
         }
-        check_range("iteration_fraction", self.iteration_fraction, 0.0, 1.0)?;
-        let usize_range = |field: &str, v: usize, lo: usize, hi: usize| {
-            if v < lo || v > hi {
-                Err(FieldError::new(
-                    format!("options.{field}"),
-                    format!("must be within [{lo}, {hi}], got {v}"),
-                ))
-            } else {
-                Ok(())
-            }
-        };
-        usize_range("max_iterations", self.max_iterations, 1, 10_000_000)?;
-        usize_range(
+        if !(self.iteration_fraction.is_finite()
+            && self.iteration_fraction > 0.0
+            && self.iteration_fraction <= 1.0)
+        {
+            return Err(FieldError::new(
+                "options.iteration_fraction",
+                format!("must be within (0, 1], got {}", self.iteration_fraction),
+            ));
+        }
+        check_count("max_iterations", self.max_iterations, 1, MAX_ITERATIONS)?;
+        check_count(
             "min_iterations",
             self.min_iterations,
             0,
             self.max_iterations,
         )?;
-        usize_range("patience", self.patience, 1, 10_000_000)?;
-        usize_range("restarts", self.restarts, 0, 10)?;
-        usize_range("normals_k", self.normals_k, 3, 100)?;
-        usize_range(
+        check_count("patience", self.patience, 1, MAX_ITERATIONS)?;
+        check_count("restarts", self.restarts, 0, 10)?;
+        check_count("normals_k", self.normals_k, 3, 100)?;
+        check_count(
             "opposition_candidates",
             self.opposition_candidates,
             8,
             100_000,
         )?;
-        usize_range("contact_candidates", self.contact_candidates, 2, 100_000)?;
-        usize_range("friction_cone_edges", self.friction_cone_edges, 3, 64)?;
+        check_count("contact_candidates", self.contact_candidates, 2, 100_000)?;
+        check_count("friction_cone_edges", self.friction_cone_edges, 3, 64)?;
         if let Some(l) = self.lambda1 {
             check_range("lambda1", l, 1e-4, 2.0)?;
         }
@@ -101,9 +121,9 @@ impl PlannerOptions {
         }
         check_range("pregrasp_distance", self.pregrasp_distance, 0.0, 1.0)?;
         check_range("max_center_offset", self.max_center_offset, 0.0, 10.0)?;
-        usize_range("candidates", self.candidates, 1, 16)?;
+        check_count("candidates", self.candidates, 1, 16)?;
         check_range("squeeze_depth", self.squeeze_depth, 0.0, 0.05)?;
-        usize_range("final_candidates", self.final_candidates, 1, 200)?;
+        check_count("final_candidates", self.final_candidates, 1, 200)?;
         Ok(())
     }
 }
@@ -487,4 +507,42 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         total: t_start.elapsed().as_secs_f64(),
     };
     Ok(plan)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn field_of(o: &PlannerOptions) -> Option<String> {
+        o.validate().err().map(|e| e.field)
+    }
+
+    /// The defaults pass; each bound refuses what is out of it, naming the option.
+    #[test]
+    fn option_bounds_name_the_option() {
+        assert_eq!(field_of(&PlannerOptions::default()), None);
+        let cases: [(&str, fn(&mut PlannerOptions)); 9] = [
+            ("options.friction", |o| o.friction = 7.0),
+            ("options.friction", |o| o.friction = 0.0),
+            ("options.stage1_weights", |o| o.stage1_weights = [-0.5, 1.0]),
+            ("options.stage2_weights", |o| o.stage2_weights = [0.0, 0.0]),
+            ("options.iteration_fraction", |o| o.iteration_fraction = 0.0),
+            ("options.max_iterations", |o| {
+                o.max_iterations = MAX_ITERATIONS + 1
+            }),
+            ("options.min_iterations", |o| {
+                o.max_iterations = 10;
+                o.min_iterations = 11
+            }),
+            ("options.opposition_candidates", |o| {
+                o.opposition_candidates = 7
+            }),
+            ("options.squeeze_depth", |o| o.squeeze_depth = f64::NAN),
+        ];
+        for (field, set) in cases {
+            let mut o = PlannerOptions::default();
+            set(&mut o);
+            assert_eq!(field_of(&o).as_deref(), Some(field), "{o:?}");
+        }
+    }
 }
