@@ -521,7 +521,8 @@ mod tests {
     #[test]
     fn option_bounds_name_the_option() {
         assert_eq!(field_of(&PlannerOptions::default()), None);
-        let cases: [(&str, fn(&mut PlannerOptions)); 9] = [
+        type Case = (&'static str, fn(&mut PlannerOptions));
+        let cases: [Case; 9] = [
             ("options.friction", |o| o.friction = 7.0),
             ("options.friction", |o| o.friction = 0.0),
             ("options.stage1_weights", |o| o.stage1_weights = [-0.5, 1.0]),

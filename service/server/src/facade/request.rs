@@ -1,0 +1,101 @@
+//! A plan request in domain terms, as both transports produce it.
+
+use graspd_core::cloud::PointCloud;
+use graspd_core::perception::{RgbdFrame, TargetHint};
+use graspd_core::{FieldError, HandDescription, PlanHints, PlannerOptions};
+
+/// What the plan is computed from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PlanSource {
+    /// A cloud as decoded at the edge; the facade validates it.
+    Cloud(PointCloud),
+    /// An RGB-D frame as received; the facade decodes and validates it (method.md §4).
+    Rgbd(Box<RgbdFrame>),
+}
+
+/// Which hand to plan for.
+#[derive(Debug, Clone, PartialEq)]
+pub enum HandChoice {
+    /// A hand of the catalog.
+    Name(String),
+    /// An inline description, validated like the data files.
+    Inline(Box<HandDescription>),
+}
+
+/// Hints that only make sense on an image (RGB-D input); with a cloud they are refused rather
+/// than ignored.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ImageHints {
+    /// The object at this pixel (u, v), and the attention point there.
+    pub attention_pixel: Option<(u32, u32)>,
+    /// The object with most pixels in [u_min, u_max) × [v_min, v_max).
+    pub region: Option<[u32; 4]>,
+    /// The most salient object (the default without a pixel or region).
+    pub most_salient: bool,
+}
+
+impl ImageHints {
+    /// The first hint given, by its field name.
+    pub fn field(&self) -> Option<&'static str> {
+        if self.attention_pixel.is_some() {
+            Some("hints.attention_pixel")
+        } else if self.region.is_some() {
+            Some("hints.region")
+        } else if self.most_salient {
+            Some("hints.most_salient")
+        } else {
+            None
+        }
+    }
+
+    /// The segmentation's target hint; errors name the conflicting hint.
+    pub(super) fn target(&self) -> Result<TargetHint, FieldError> {
+        match (self.attention_pixel, self.region) {
+            (Some(_), Some(_)) => Err(FieldError::new(
+                "hints.region",
+                "give either attention_pixel or region, not both",
+            )),
+            (Some((u, v)), None) => Ok(TargetHint::Pixel { u, v }),
+            (None, Some([u_min, v_min, u_max, v_max])) => {
+                if u_min >= u_max || v_min >= v_max {
+                    return Err(FieldError::new(
+                        "hints.region",
+                        format!(
+                            "is empty: u {u_min}..{u_max}, v {v_min}..{v_max} (need u_min < u_max and v_min < v_max)"
+                        ),
+                    ));
+                }
+                Ok(TargetHint::Region {
+                    u_min,
+                    v_min,
+                    u_max,
+                    v_max,
+                })
+            }
+            (None, None) => Ok(TargetHint::Auto),
+        }
+    }
+}
+
+/// What to return besides the plan (RGB-D input).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct OutputOptions {
+    /// Return the grasp-type model's six maps with the longer side at most this many pixels
+    /// (0 = do not).
+    pub probability_maps_max_side: u32,
+    /// Draw the overlay PNG (ROI, attention point, heat map of s*, contacts, opposition).
+    pub overlay: bool,
+}
+
+/// One plan request in domain terms, as both transports produce it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanRequest {
+    pub source: PlanSource,
+    /// Further views of the scene (RGB-D input only; `extra_views`).
+    pub extra_views: Vec<RgbdFrame>,
+    pub hand: HandChoice,
+    pub options: PlannerOptions,
+    pub hints: PlanHints,
+    pub image_hints: ImageHints,
+    pub output: OutputOptions,
+}
