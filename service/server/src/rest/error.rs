@@ -1,7 +1,7 @@
 //! The REST error answer: an HTTP status and `{"error": {"code", "field", "message"}}`.
 
 use super::json::{ErrorDetailJson, ErrorJson};
-use crate::facade::ServiceError;
+use crate::facade::{Limits, ServiceError};
 use crate::ops::edge::{AnswerCode, Refusal};
 use crate::runner::SHED_RETRY_AFTER;
 use axum::Json;
@@ -160,4 +160,19 @@ pub fn code_of(status: StatusCode) -> AnswerCode {
         n => Cow::Owned(n.to_string()),
     };
     (code, status.is_client_error() || status.is_server_error())
+}
+
+/// A body that could not be read: over the limit (413) or broken (400).
+pub(crate) fn body_error(status: StatusCode, text: String, limits: &Limits) -> ApiError {
+    if status == StatusCode::PAYLOAD_TOO_LARGE {
+        ApiError::too_large(FieldError::new(
+            "body",
+            format!(
+                "the request body exceeds the configured limit of {} bytes (max_message_bytes)",
+                limits.max_message_bytes
+            ),
+        ))
+    } else {
+        ApiError::invalid(FieldError::new("body", text))
+    }
 }

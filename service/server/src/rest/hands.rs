@@ -1,9 +1,8 @@
 //! `/v1/hands`: the hand catalog, and registering hands from their robot descriptions.
 
 use super::error::ApiError;
+use super::error::body_error;
 use super::json::{self, ErrorJson, HandJson, HandsJson, RegisterHandJson, RegisteredHandJson};
-use super::openapi::HandUploadForm;
-use super::plan::body_error;
 use crate::facade::Limits;
 use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
 use crate::runner::PlanRunner;
@@ -236,4 +235,26 @@ async fn from_multipart(
         },
         replace,
     ))
+}
+
+/// `POST /v1/hands` as multipart/form-data.
+#[derive(utoipa::ToSchema)]
+#[allow(dead_code)]
+pub struct HandUploadForm {
+    /// The MJCF or URDF document; its file name's extension (.xml, .urdf) gives the format
+    /// unless a `format` part does.
+    #[schema(value_type = String, format = Binary)]
+    model: Vec<u8>,
+    /// One part per mesh or included file; its file name is its path relative to the model.
+    #[schema(value_type = Option<Vec<String>>, format = Binary)]
+    asset: Option<Vec<Vec<u8>>>,
+    name: Option<String>,
+    /// mjcf or urdf.
+    format: Option<String>,
+    palm: Option<String>,
+    thumb: Option<String>,
+    /// Comma-separated body names.
+    fingertips: Option<String>,
+    /// true to replace a registered hand of the same name.
+    replace: Option<bool>,
 }

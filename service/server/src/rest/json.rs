@@ -4,7 +4,7 @@
 //! is, and the DTOs here cover what differs: clouds (arrays or base64), positions as
 //! `{x, y, z}` (accepted as `[x, y, z]` too), poses and the response layout.
 
-use super::openapi::{
+use super::schemas::{
     CollisionReportDoc, DetectorDoc, ElectrodePolarityDoc, FrameResultDoc, GraspTypeDoc,
     HandDescriptionDoc, HandPartDoc, LayoutDoc, PerceptionTimingsDoc, PidGainsDoc, PlaneSourceDoc,
     PlannerModeDoc, PlannerOptionsDoc, QualityDoc, StageStatsDoc, TargetChoiceDoc, TimingsDoc,

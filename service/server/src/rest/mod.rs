@@ -6,6 +6,7 @@ pub mod hands;
 pub mod json;
 pub mod openapi;
 pub mod plan;
+pub mod schemas;
 pub mod stabilize;
 pub mod tactile;
 

@@ -5,9 +5,8 @@
 //! `?format=png` answers with the overlay image (`image/png`) instead of the JSON plan (RGB-D
 //! input only); `?format=json` is the default.
 
-use super::error::ApiError;
+use super::error::{ApiError, body_error};
 use super::json::{self, ErrorJson, PlanRequestJson, PlanResponseJson};
-use super::openapi::PlanUpload;
 use crate::facade::{Limits, PlanRequest, PlanSource};
 use crate::ops::Transport;
 use crate::runner::PlanRunner;
@@ -135,21 +134,6 @@ async fn after_reading_body(request: Request, limits: &Limits, e: ApiError) -> A
     e
 }
 
-/// A body that could not be read: over the limit (413) or broken (400).
-pub(crate) fn body_error(status: StatusCode, text: String, limits: &Limits) -> ApiError {
-    if status == StatusCode::PAYLOAD_TOO_LARGE {
-        ApiError::too_large(FieldError::new(
-            "body",
-            format!(
-                "the request body exceeds the configured limit of {} bytes (max_message_bytes)",
-                limits.max_message_bytes
-            ),
-        ))
-    } else {
-        ApiError::invalid(FieldError::new("body", text))
-    }
-}
-
 async fn from_multipart(
     mut multipart: Multipart,
     limits: &Limits,
@@ -209,4 +193,23 @@ async fn from_multipart(
         images,
         limits,
     )?)
+}
+
+/// `POST /v1/plan` as multipart/form-data: a `cloud` file, or `color` and `depth` files, and a
+/// `request` part (PlanRequestJson without the file's data).
+#[derive(utoipa::ToSchema)]
+#[allow(dead_code)]
+pub struct PlanUpload {
+    /// PCD (ascii/binary) or PLY (ascii/binary little-endian) point cloud.
+    #[schema(value_type = Option<String>, format = Binary)]
+    cloud: Option<Vec<u8>>,
+    /// The colour image (PNG or JPEG) of an RGB-D frame.
+    #[schema(value_type = Option<String>, format = Binary)]
+    color: Option<Vec<u8>>,
+    /// The depth image (16-bit PNG) of an RGB-D frame.
+    #[schema(value_type = Option<String>, format = Binary)]
+    depth: Option<Vec<u8>>,
+    /// The request JSON (PlanRequestJson) without the file's data; RGB-D needs at least
+    /// `rgbd.intrinsics`.
+    request: Option<PlanRequestJson>,
 }

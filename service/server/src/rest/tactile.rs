@@ -14,9 +14,8 @@
 //!   `session` (the full session; default one `biotac` finger with default taring).
 
 use super::error::ApiError;
+use super::error::body_error;
 use super::json::{self, AnalyzeCsvQuery, AnalyzeRequestJson, AnalyzeResponseJson, ErrorJson};
-use super::openapi::AnalyzeUpload;
-use super::plan::body_error;
 use crate::facade::{Limits, ServiceError, TactileSessionRequest};
 use crate::runner::PlanRunner;
 use axum::Json;
@@ -160,4 +159,15 @@ async fn from_multipart(
     };
     let session = session.unwrap_or_else(|| AnalyzeCsvQuery::default().session());
     Ok((json::tactile_session_from_json(session), frames))
+}
+
+/// `POST /v1/tactile/analyze` as multipart/form-data.
+#[derive(utoipa::ToSchema)]
+#[allow(dead_code)]
+pub struct AnalyzeUpload {
+    /// A `_bio.csv` recording (timestamp,tdc,tac,pdc,pac1..pac22,ele1..eleN) of one finger.
+    #[schema(value_type = String, format = Binary)]
+    bio_csv: Vec<u8>,
+    /// The session JSON; default one biotac finger with default taring.
+    session: Option<super::json::TactileSessionJson>,
 }
