@@ -1,16 +1,13 @@
 //! `/v1/hands`: the hand catalog, and registering hands from their robot descriptions.
 
+use super::body::{Body, Part, read_body};
 use super::error::ApiError;
-use super::error::body_error;
 use super::json::{self, ErrorJson, HandJson, HandsJson, RegisterHandJson, RegisteredHandJson};
-use crate::facade::Limits;
 use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
 use crate::runner::PlanRunner;
 use axum::Json;
-use axum::body::Bytes;
-use axum::extract::{FromRequest, Multipart, Path, Request, State};
+use axum::extract::{Path, Request, State};
 use axum::http::StatusCode;
-use axum::http::header::CONTENT_TYPE;
 use graspd_core::FieldError;
 
 #[utoipa::path(
@@ -82,31 +79,19 @@ pub async fn register(
     request: Request,
 ) -> Result<(StatusCode, Json<RegisteredHandJson>), ApiError> {
     let limits = *runner.service().limits();
-    let content_type = request
-        .headers()
-        .get(CONTENT_TYPE)
-        .and_then(|v| v.to_str().ok())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    let (upload, replace) = if content_type.starts_with("multipart/form-data") {
-        let multipart = Multipart::from_request(request, &())
-            .await
-            .map_err(|e| body_error(e.status(), e.body_text(), &limits))?;
-        from_multipart(multipart, &limits).await?
-    } else if content_type.is_empty() || content_type.starts_with("application/json") {
-        let bytes = Bytes::from_request(request, &())
-            .await
-            .map_err(|e| body_error(e.status(), e.body_text(), &limits))?;
-        let body: RegisterHandJson = json::parse(&bytes, "body")?;
-        json::register_request_from_json(body)?
-    } else {
-        return Err(ApiError::new(
-            StatusCode::UNSUPPORTED_MEDIA_TYPE,
-            "unsupported_media_type",
-            format!(
-                "content type '{content_type}' is not supported; send application/json or multipart/form-data"
-            ),
-        ));
+    let (upload, replace) = match read_body(
+        request,
+        &limits,
+        false,
+        "application/json or multipart/form-data",
+    )
+    .await?
+    {
+        Body::Multipart(parts) => from_multipart(parts)?,
+        Body::Json(bytes) | Body::Csv(bytes) => {
+            let body: RegisterHandJson = json::parse(&bytes, "body")?;
+            json::register_request_from_json(body)?
+        }
     };
     let service = runner.service().clone();
     let registered = tokio::task::spawn_blocking(move || service.register_hand(upload, replace))
@@ -122,10 +107,7 @@ pub async fn register(
     Ok((StatusCode::CREATED, Json(registered.into())))
 }
 
-async fn from_multipart(
-    mut multipart: Multipart,
-    limits: &Limits,
-) -> Result<(HandUpload, bool), ApiError> {
+fn from_multipart(parts: Vec<Part>) -> Result<(HandUpload, bool), ApiError> {
     let mut name: Option<String> = None;
     let mut format: Option<String> = None;
     let mut model: Option<(Option<String>, String)> = None;
@@ -136,18 +118,10 @@ async fn from_multipart(
         String::from_utf8(bytes.to_vec())
             .map_err(|_| ApiError::invalid(FieldError::new(field, "must be UTF-8 text")))
     };
-    while let Some(part) = multipart
-        .next_field()
-        .await
-        .map_err(|e| body_error(e.status(), e.body_text(), limits))?
-    {
-        let part_name = part.name().unwrap_or("").to_string();
-        let file_name = part.file_name().map(str::to_string);
-        let bytes = part
-            .bytes()
-            .await
-            .map_err(|e| body_error(e.status(), e.body_text(), limits))?;
-        match part_name.as_str() {
+    for part in parts {
+        let bytes = &part.bytes;
+        let file_name = part.file_name.clone();
+        match part.name.as_str() {
             "model" if model.is_none() => model = Some((file_name, text("model.text", &bytes)?)),
             "asset" => {
                 let i = assets.len();
@@ -187,20 +161,11 @@ async fn from_multipart(
                     }
                 }
             }
-            "model" | "name" | "format" => {
-                return Err(ApiError::invalid(FieldError::new(
-                    part_name.clone(),
-                    format!("the part '{part_name}' is given twice"),
-                )));
-            }
-            other => {
-                return Err(ApiError::invalid(FieldError::new(
-                    "multipart",
-                    format!(
-                        "unknown part '{}' (expected model, asset, name, format, palm, thumb, fingertips, replace)",
-                        other.escape_debug()
-                    ),
-                )));
+            "model" | "name" | "format" => return Err(part.twice()),
+            _ => {
+                return Err(
+                    part.unknown("model, asset, name, format, palm, thumb, fingertips, replace")
+                );
             }
         }
     }

@@ -1,6 +1,7 @@
 //! The REST transport (axum): routes, one JSON conversion module, typed errors. Thin over the
 //! facade.
 
+pub mod body;
 pub mod error;
 pub mod hands;
 pub mod json;

@@ -5,15 +5,14 @@
 //! `?format=png` answers with the overlay image (`image/png`) instead of the JSON plan (RGB-D
 //! input only); `?format=json` is the default.
 
-use super::error::{ApiError, body_error};
+use super::body::{Body, Part, after_reading_body, read_body};
+use super::error::ApiError;
 use super::json::{self, ErrorJson, PlanRequestJson, PlanResponseJson};
 use crate::facade::{Limits, PlanRequest, PlanSource};
 use crate::ops::Transport;
 use crate::runner::PlanRunner;
 use axum::Json;
-use axum::body::Bytes;
-use axum::extract::{FromRequest, Multipart, Query, Request, State};
-use axum::http::StatusCode;
+use axum::extract::{Query, Request, State};
 use axum::http::header::CONTENT_TYPE;
 use axum::response::{IntoResponse, Response};
 use graspd_core::FieldError;
@@ -78,32 +77,19 @@ pub async fn plan(
         Ok(png) => png,
         Err(e) => return Err(after_reading_body(request, &limits, e).await),
     };
-    let content_type = request
-        .headers()
-        .get(CONTENT_TYPE)
-        .and_then(|v| v.to_str().ok())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    let plan_request = if content_type.starts_with("multipart/form-data") {
-        let multipart = Multipart::from_request(request, &())
-            .await
-            .map_err(|e| body_error(e.status(), e.body_text(), &limits))?;
-        from_multipart(multipart, &limits).await?
-    } else if content_type.is_empty() || content_type.starts_with("application/json") {
-        let bytes = Bytes::from_request(request, &())
-            .await
-            .map_err(|e| body_error(e.status(), e.body_text(), &limits))?;
-        let body: PlanRequestJson = json::parse(&bytes, "body")?;
-        json::plan_request_from_json(body, None, Default::default(), &limits)?
-    } else {
-        let e = ApiError::new(
-            StatusCode::UNSUPPORTED_MEDIA_TYPE,
-            "unsupported_media_type",
-            format!(
-                "content type '{content_type}' is not supported; send application/json (curl: -H 'content-type: application/json') or multipart/form-data"
-            ),
-        );
-        return Err(after_reading_body(request, &limits, e).await);
+    let plan_request = match read_body(
+        request,
+        &limits,
+        false,
+        "application/json (curl: -H 'content-type: application/json') or multipart/form-data",
+    )
+    .await?
+    {
+        Body::Multipart(parts) => from_multipart(parts, &limits)?,
+        Body::Json(bytes) | Body::Csv(bytes) => {
+            let body: PlanRequestJson = json::parse(&bytes, "body")?;
+            json::plan_request_from_json(body, None, Default::default(), &limits)?
+        }
     };
     let mut plan_request = plan_request;
     if png {
@@ -126,32 +112,13 @@ pub async fn plan(
     Ok(Json(PlanResponseJson::from(&plan)).into_response())
 }
 
-/// `e`, once the body (up to the size limit) has been read: an answer sent while an HTTP/1.1
-/// client is still writing a large body closes the connection under it, and the client sees a
-/// broken pipe instead of the error.
-async fn after_reading_body(request: Request, limits: &Limits, e: ApiError) -> ApiError {
-    let _ = axum::body::to_bytes(request.into_body(), limits.max_message_bytes).await;
-    e
-}
-
-async fn from_multipart(
-    mut multipart: Multipart,
-    limits: &Limits,
-) -> Result<PlanRequest, ApiError> {
+fn from_multipart(parts: Vec<Part>, limits: &Limits) -> Result<PlanRequest, ApiError> {
     let mut cloud: Option<PointCloud> = None;
     let mut request: Option<PlanRequestJson> = None;
     let mut images = json::ImageParts::default();
-    while let Some(field) = multipart
-        .next_field()
-        .await
-        .map_err(|e| body_error(e.status(), e.body_text(), limits))?
-    {
-        let name = field.name().unwrap_or("").to_string();
-        let bytes = field
-            .bytes()
-            .await
-            .map_err(|e| body_error(e.status(), e.body_text(), limits))?;
-        match name.as_str() {
+    for part in parts {
+        let bytes = &part.bytes;
+        match part.name.as_str() {
             "cloud" if cloud.is_none() => {
                 if bytes.len() / 12 > limits.max_points.saturating_mul(64) {
                     return Err(ApiError::too_large(FieldError::new(
@@ -159,25 +126,16 @@ async fn from_multipart(
                         "the file is too large for the configured max_points",
                     )));
                 }
-                cloud = Some(read_cloud_file(&bytes)?);
+                cloud = Some(read_cloud_file(bytes)?);
             }
-            "request" if request.is_none() => request = Some(json::parse(&bytes, "request")?),
+            "request" if request.is_none() => request = Some(json::parse(bytes, "request")?),
             "color" if images.color.is_none() => images.color = Some(bytes.to_vec()),
             "depth" if images.depth.is_none() => images.depth = Some(bytes.to_vec()),
-            "cloud" | "request" | "color" | "depth" => {
-                return Err(ApiError::invalid(FieldError::new(
-                    name.clone(),
-                    format!("the part '{name}' is given twice"),
-                )));
-            }
-            other => {
-                return Err(ApiError::invalid(FieldError::new(
-                    "multipart",
-                    format!(
-                        "unknown part '{}' (expected a file part 'cloud', or 'color' and 'depth', and a JSON part 'request')",
-                        other.escape_debug()
-                    ),
-                )));
+            "cloud" | "request" | "color" | "depth" => return Err(part.twice()),
+            _ => {
+                return Err(part.unknown(
+                    "a file part 'cloud', or 'color' and 'depth', and a JSON part 'request'",
+                ));
             }
         }
     }

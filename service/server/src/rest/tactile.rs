@@ -13,16 +13,13 @@
 //! * `multipart/form-data`: a file part `bio_csv` (the CSV above) and an optional JSON part
 //!   `session` (the full session; default one `biotac` finger with default taring).
 
+use super::body::{Body, Part, read_body};
 use super::error::ApiError;
-use super::error::body_error;
 use super::json::{self, AnalyzeCsvQuery, AnalyzeRequestJson, AnalyzeResponseJson, ErrorJson};
-use crate::facade::{Limits, ServiceError, TactileSessionRequest};
+use crate::facade::{ServiceError, TactileSessionRequest};
 use crate::runner::PlanRunner;
 use axum::Json;
-use axum::body::Bytes;
-use axum::extract::{FromRequest, Multipart, Query, Request, State};
-use axum::http::StatusCode;
-use axum::http::header::CONTENT_TYPE;
+use axum::extract::{Query, Request, State};
 use graspd_core::FieldError;
 use graspd_core::tactile::{Frame, Recording};
 
@@ -53,48 +50,35 @@ pub async fn analyze(
     request: Request,
 ) -> Result<Json<AnalyzeResponseJson>, ApiError> {
     let limits = *runner.service().limits();
-    let content_type = request
-        .headers()
-        .get(CONTENT_TYPE)
-        .and_then(|v| v.to_str().ok())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    let (session, frames) = if content_type.starts_with("multipart/form-data") {
-        let multipart = Multipart::from_request(request, &())
-            .await
-            .map_err(|e| body_error(e.status(), e.body_text(), &limits))?;
-        from_multipart(multipart, &limits).await?
-    } else if content_type.starts_with("text/csv") {
-        let query = Query::<AnalyzeCsvQuery>::try_from_uri(request.uri())
-            .map_err(|e| ApiError::invalid(FieldError::new("query", e.body_text())))?
-            .0;
-        let bytes = Bytes::from_request(request, &())
-            .await
-            .map_err(|e| body_error(e.status(), e.body_text(), &limits))?;
-        (
-            json::tactile_session_from_json(query.session()),
-            frames_from_csv(&bytes, "body")?,
-        )
-    } else if content_type.is_empty() || content_type.starts_with("application/json") {
-        let bytes = Bytes::from_request(request, &())
-            .await
-            .map_err(|e| body_error(e.status(), e.body_text(), &limits))?;
-        let body: AnalyzeRequestJson = json::parse(&bytes, "body")?;
-        (
-            json::tactile_session_from_json(body.session),
-            body.frames
-                .into_iter()
-                .map(json::tactile_frame_from_json)
-                .collect(),
-        )
-    } else {
-        return Err(ApiError::new(
-            StatusCode::UNSUPPORTED_MEDIA_TYPE,
-            "unsupported_media_type",
-            format!(
-                "content type '{content_type}' is not supported; send application/json, text/csv (a _bio.csv recording, session in the query) or multipart/form-data (parts bio_csv and session)"
-            ),
-        ));
+    let uri = request.uri().clone();
+    let (session, frames) = match read_body(
+        request,
+        &limits,
+        true,
+        "application/json, text/csv (a _bio.csv recording, session in the query) or multipart/form-data (parts bio_csv and session)",
+    )
+    .await?
+    {
+        Body::Multipart(parts) => from_multipart(parts)?,
+        Body::Csv(bytes) => {
+            let query = Query::<AnalyzeCsvQuery>::try_from_uri(&uri)
+                .map_err(|e| ApiError::invalid(FieldError::new("query", e.body_text())))?
+                .0;
+            (
+                json::tactile_session_from_json(query.session()),
+                frames_from_csv(&bytes, "body")?,
+            )
+        }
+        Body::Json(bytes) => {
+            let body: AnalyzeRequestJson = json::parse(&bytes, "body")?;
+            (
+                json::tactile_session_from_json(body.session),
+                body.frames
+                    .into_iter()
+                    .map(json::tactile_frame_from_json)
+                    .collect(),
+            )
+        }
     };
     let service = runner.service().clone();
     let results = tokio::task::spawn_blocking(move || service.analyze_tactile(session, &frames))
@@ -113,41 +97,21 @@ fn frames_from_csv(bytes: &[u8], field: &str) -> Result<Vec<Frame>, ApiError> {
     Ok(recording.frames())
 }
 
-async fn from_multipart(
-    mut multipart: Multipart,
-    limits: &Limits,
-) -> Result<(TactileSessionRequest, Vec<Frame>), ApiError> {
+fn from_multipart(parts: Vec<Part>) -> Result<(TactileSessionRequest, Vec<Frame>), ApiError> {
     let mut frames = None;
     let mut session = None;
-    while let Some(field) = multipart
-        .next_field()
-        .await
-        .map_err(|e| body_error(e.status(), e.body_text(), limits))?
-    {
-        let name = field.name().unwrap_or("").to_string();
-        let bytes = field
-            .bytes()
-            .await
-            .map_err(|e| body_error(e.status(), e.body_text(), limits))?;
-        match name.as_str() {
-            "bio_csv" if frames.is_none() => frames = Some(frames_from_csv(&bytes, "bio_csv")?),
+    for part in parts {
+        let bytes = &part.bytes;
+        match part.name.as_str() {
+            "bio_csv" if frames.is_none() => frames = Some(frames_from_csv(bytes, "bio_csv")?),
             "session" if session.is_none() => {
-                session = Some(json::parse::<json::TactileSessionJson>(&bytes, "session")?)
+                session = Some(json::parse::<json::TactileSessionJson>(bytes, "session")?)
             }
-            "bio_csv" | "session" => {
-                return Err(ApiError::invalid(FieldError::new(
-                    name.clone(),
-                    format!("the part '{name}' is given twice"),
-                )));
-            }
-            other => {
-                return Err(ApiError::invalid(FieldError::new(
-                    "multipart",
-                    format!(
-                        "unknown part '{}' (expected a file part 'bio_csv' and an optional JSON part 'session')",
-                        other.escape_debug()
-                    ),
-                )));
+            "bio_csv" | "session" => return Err(part.twice()),
+            _ => {
+                return Err(
+                    part.unknown("a file part 'bio_csv' and an optional JSON part 'session'")
+                );
             }
         }
     }
