@@ -122,7 +122,7 @@ fn from_multipart(parts: Vec<Part>) -> Result<(HandUpload, bool), ApiError> {
         let bytes = &part.bytes;
         let file_name = part.file_name.clone();
         match part.name.as_str() {
-            "model" if model.is_none() => model = Some((file_name, text("model.text", &bytes)?)),
+            "model" if model.is_none() => model = Some((file_name, text("model.text", bytes)?)),
             "asset" => {
                 let i = assets.len();
                 let path = file_name.filter(|f| !f.is_empty()).ok_or_else(|| {
@@ -136,13 +136,13 @@ fn from_multipart(parts: Vec<Part>) -> Result<(HandUpload, bool), ApiError> {
                     data: bytes.to_vec(),
                 });
             }
-            "name" if name.is_none() => name = Some(text("name", &bytes)?.trim().to_string()),
-            "format" if format.is_none() => format = Some(text("model.format", &bytes)?),
-            "palm" => overrides.palm = Some(text("model.palm", &bytes)?.trim().to_string()),
-            "thumb" => overrides.thumb = Some(text("model.thumb", &bytes)?.trim().to_string()),
+            "name" if name.is_none() => name = Some(text("name", bytes)?.trim().to_string()),
+            "format" if format.is_none() => format = Some(text("model.format", bytes)?),
+            "palm" => overrides.palm = Some(text("model.palm", bytes)?.trim().to_string()),
+            "thumb" => overrides.thumb = Some(text("model.thumb", bytes)?.trim().to_string()),
             "fingertips" => {
                 overrides.fingertips = Some(
-                    text("model.fingertips", &bytes)?
+                    text("model.fingertips", bytes)?
                         .split(',')
                         .map(|s| s.trim().to_string())
                         .filter(|s| !s.is_empty())
@@ -150,7 +150,7 @@ fn from_multipart(parts: Vec<Part>) -> Result<(HandUpload, bool), ApiError> {
                 )
             }
             "replace" => {
-                replace = match text("replace", &bytes)?.trim() {
+                replace = match text("replace", bytes)?.trim() {
                     "true" | "1" => true,
                     "false" | "0" | "" => false,
                     other => {
