@@ -11,11 +11,11 @@
 mod onnx_builder;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use graspd_core::onnx_runtime::init_onnx_runtime;
 use graspd_core::perception::{
     CameraIntrinsics, CloudFrame, ColorEncoding, DepthEncoding, GraspTypeModel, ImageData,
     InformationParams, RegionParams, RgbdFrame, RgbdLimits, SaliencyParams, SegmentationParams,
-    TargetHint, depth_to_cloud, grasp_information, init_onnx_runtime, saliency_map,
-    salient_regions, segment,
+    TargetHint, depth_to_cloud, grasp_information, saliency_map, salient_regions, segment,
 };
 use graspd_core::{HandCatalog, PlanHints, PlanInput, PlannerOptions, plan};
 use graspd_testkit::Object;

@@ -8,7 +8,7 @@
 //! model runs on every k-th frame (k = 3), so its cost per frame is about a third of a run.
 //! `cargo bench -p graspd-core --bench tactile_frame`.
 
-use graspd_core::perception::init_onnx_runtime;
+use graspd_core::onnx_runtime::init_onnx_runtime;
 use graspd_core::tactile::detector::EventDetector;
 use graspd_core::tactile::layout::SensorLayout;
 use graspd_core::tactile::stabilizer::{

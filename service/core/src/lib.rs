@@ -6,6 +6,7 @@ pub mod cloud;
 pub mod error;
 pub mod grasp_type;
 pub mod hand;
+pub mod onnx_runtime;
 pub mod perception;
 pub mod planning;
 pub mod tactile;

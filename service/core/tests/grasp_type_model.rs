@@ -11,10 +11,11 @@
 mod onnx_builder;
 
 use graspd_core::GraspType;
+use graspd_core::onnx_runtime::init_onnx_runtime;
 use graspd_core::perception::grasp_type_detection::{IMAGENET_MEAN, IMAGENET_STD};
 use graspd_core::perception::{
     CameraIntrinsics, DecodedFrame, GraspTypeModel, ModelError, TypeMaps, attention_pixel,
-    choose_type, init_onnx_runtime, type_probabilities,
+    choose_type, type_probabilities,
 };
 use onnx_builder::{DOUBLE, Dim, FLOAT, ModelBuilder, conv1x1_model};
 use std::path::{Path, PathBuf};

@@ -11,7 +11,7 @@
 #[path = "common/onnx_builder.rs"]
 mod onnx_builder;
 
-use graspd_core::perception::init_onnx_runtime;
+use graspd_core::onnx_runtime::init_onnx_runtime;
 use graspd_core::tactile::detector::{
     ContactEvent, Detection, DetectorSample, EventDetector, Material,
 };

@@ -15,7 +15,7 @@
 //! The data directory is `$GRASPD_TACTILE_DATA` or `<repo>/../shared/testdata/tactile/
 //! biotac_slide`; the test is skipped (with a note) when neither exists.
 
-use graspd_core::perception::init_onnx_runtime;
+use graspd_core::onnx_runtime::init_onnx_runtime;
 use graspd_core::tactile::detector::{ContactEvent, EventDetector, Material};
 use graspd_core::tactile::layout::SensorLayout;
 use graspd_core::tactile::recording::Recording;

@@ -4,8 +4,9 @@
 //! strongest mean-shift mode of the chosen type's map inside the region (its 3-D point is found
 //! on the target's points by [`super::information`]).
 //!
-//! The network runs in ONNX Runtime through `ort`, loaded at run time ([`init_onnx_runtime`]:
-//! `ORT_DYLIB_PATH` or an explicit path; `scripts/fetch-onnxruntime.sh` fetches the library).
+//! The network runs in ONNX Runtime through `ort`, loaded at run time
+//! ([`crate::onnx_runtime::init_onnx_runtime`]: `ORT_DYLIB_PATH` or an explicit path;
+//! `scripts/fetch-onnxruntime.sh` fetches the library).
 //!
 //! # Model contract (docs/model-contract.md)
 //!
@@ -27,15 +28,12 @@
 
 use super::rgbd::DecodedFrame;
 use crate::grasp_type::GraspType;
-use ort::environment::Environment;
+use crate::onnx_runtime::{RuntimeError, fmt_dims, runtime_env, tensor_info};
 use ort::session::Session;
-use ort::value::{TensorElementType, TensorRef, ValueType};
+use ort::value::{TensorElementType, TensorRef};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, PoisonError};
 use thiserror::Error;
-
-/// The environment variable naming the ONNX Runtime library when no path is given.
-pub const ORT_DYLIB_ENV: &str = "ORT_DYLIB_PATH";
 
 /// Number of grasp types, i.e. output channels of the model.
 pub const NUM_TYPES: usize = GraspType::ALL.len();
@@ -49,16 +47,12 @@ pub const IMAGENET_STD: [f32; 3] = [0.229, 0.224, 0.225];
 pub const META_MEAN: &str = "graspd.mean";
 pub const META_STD: &str = "graspd.std";
 
-/// Errors of the ONNX runtime and of the grasp-type model.
+/// Errors of the grasp-type model (and of the runtime under it).
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 pub enum ModelError {
-    #[error(
-        "no ONNX Runtime library: pass its path or set {ORT_DYLIB_ENV} \
-         (scripts/fetch-onnxruntime.sh fetches libonnxruntime.so.1.31.1)"
-    )]
-    NoRuntime,
-    #[error("cannot load the ONNX Runtime library {}: {reason}", path.display())]
-    Runtime { path: PathBuf, reason: String },
+    /// ONNX Runtime itself is missing or failed to load.
+    #[error(transparent)]
+    Runtime(#[from] RuntimeError),
     #[error("cannot load the grasp-type model {}: {reason}", path.display())]
     Load { path: PathBuf, reason: String },
     #[error(
@@ -69,77 +63,6 @@ pub enum ModelError {
     Contract { path: PathBuf, reason: String },
     #[error("grasp-type inference failed: {0}")]
     Inference(String),
-}
-
-/// The process-wide ONNX Runtime: ort loads one library and allows one environment per process.
-struct Runtime {
-    path: PathBuf,
-    env: Environment,
-}
-
-static RUNTIME: Mutex<Option<Runtime>> = Mutex::new(None);
-
-/// Loads ONNX Runtime from `dylib`, else from `$ORT_DYLIB_PATH`, once per process.
-///
-/// Later calls succeed without loading anything (a process holds a single runtime; a different
-/// path is logged and ignored), but a given path that does not exist is always an error naming
-/// it. Errors name the library's path, or say that none was given.
-pub fn init_onnx_runtime(dylib: Option<&Path>) -> Result<(), ModelError> {
-    runtime_env(dylib).map(|_| ())
-}
-
-pub(crate) fn runtime_env(dylib: Option<&Path>) -> Result<Environment, ModelError> {
-    let missing = |p: &Path| ModelError::Runtime {
-        path: p.to_path_buf(),
-        reason: "no such file (scripts/fetch-onnxruntime.sh fetches it)".into(),
-    };
-    if let Some(p) = dylib
-        && !p.is_file()
-    {
-        return Err(missing(p));
-    }
-    let mut rt = RUNTIME.lock().unwrap_or_else(PoisonError::into_inner);
-    if let Some(rt) = rt.as_ref() {
-        if let Some(p) = dylib
-            && std::path::absolute(p).ok().as_ref() != Some(&rt.path)
-        {
-            tracing::warn!(
-                requested = %p.display(),
-                loaded = %rt.path.display(),
-                "ONNX Runtime is already loaded; a process can hold only one"
-            );
-        }
-        return Ok(rt.env.clone());
-    }
-    let requested = match dylib {
-        Some(p) => Some(p.to_path_buf()),
-        None => std::env::var_os(ORT_DYLIB_ENV)
-            .filter(|s| !s.is_empty())
-            .map(PathBuf::from),
-    };
-    if let Some(p) = &requested
-        && !p.is_file()
-    {
-        return Err(missing(p));
-    }
-    let path = requested.ok_or(ModelError::NoRuntime)?;
-    // Absolute, so that ort does not look for a relative path next to the executable first.
-    let path = std::path::absolute(&path).unwrap_or(path);
-    let fail = |reason: String| ModelError::Runtime {
-        path: path.clone(),
-        reason,
-    };
-    let env = ort::init_from(&path)
-        .map_err(|e| fail(e.to_string()))?
-        .with_name("graspd")
-        .with_telemetry(false)
-        .build()
-        .map_err(|e| fail(e.to_string()))?;
-    *rt = Some(Runtime {
-        path,
-        env: env.clone(),
-    });
-    Ok(env)
 }
 
 /// The six sigmoid probability maps of one frame (Eq 4.1–4.2).
@@ -253,7 +176,7 @@ pub struct GraspTypeModel {
 impl GraspTypeModel {
     /// Loads the ONNX model at `path` and checks it against the contract (module docs).
     /// `intra_threads`: ONNX Runtime threads per run (0: its default, one per core). Initialises
-    /// ONNX Runtime from `$ORT_DYLIB_PATH` if [`init_onnx_runtime`] has not been called.
+    /// ONNX Runtime from `$ORT_DYLIB_PATH` if [`crate::onnx_runtime::init_onnx_runtime`] has not been called.
     pub fn load(path: &Path, intra_threads: usize) -> Result<Self, ModelError> {
         let load_err = |reason: String| ModelError::Load {
             path: path.to_path_buf(),
@@ -456,20 +379,6 @@ pub fn bilinear_taps(src: usize, dst: usize) -> Vec<(usize, usize, f32)> {
         .collect()
 }
 
-/// Formats a shape, dynamic dimensions by their symbol or `?`.
-pub(crate) fn fmt_dims(dims: &[i64], symbols: &[String]) -> String {
-    let parts: Vec<String> = dims
-        .iter()
-        .enumerate()
-        .map(|(i, &d)| match symbols.get(i).filter(|s| !s.is_empty()) {
-            Some(sym) if d < 0 => sym.clone(),
-            _ if d < 0 => "?".into(),
-            _ => d.to_string(),
-        })
-        .collect();
-    format!("[{}]", parts.join(", "))
-}
-
 /// Checks the session's inputs and outputs against the contract; returns (C, H, W), H and W
 /// `None` when dynamic.
 fn check_contract(session: &Session) -> Result<(usize, Option<usize>, Option<usize>), String> {
@@ -545,17 +454,6 @@ fn check_contract(session: &Session) -> Result<(usize, Option<usize>, Option<usi
         ));
     }
     Ok((dims[1] as usize, side(dims[2]), side(dims[3])))
-}
-
-pub(crate) fn tensor_info(t: &ValueType) -> Option<(TensorElementType, &[i64], &[String])> {
-    match t {
-        ValueType::Tensor {
-            ty,
-            shape,
-            dimension_symbols,
-        } => Some((*ty, &shape[..], &dimension_symbols[..])),
-        _ => None,
-    }
 }
 
 /// The colour normalisation: ImageNet's unless the metadata overrides it.
@@ -899,25 +797,6 @@ mod tests {
         assert_eq!(
             attention_pixel(&maps, GraspType::Pinch, &roi, w, h, 8.0),
             None
-        );
-    }
-
-    #[test]
-    fn an_unloadable_library_is_named() {
-        let path = std::env::temp_dir().join(format!("graspd-not-ort-{}.so", std::process::id()));
-        std::fs::write(&path, b"not a shared library").unwrap();
-        if RUNTIME
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .is_some()
-        {
-            return;
-        }
-        let e = init_onnx_runtime(Some(&path)).unwrap_err().to_string();
-        std::fs::remove_file(&path).ok();
-        assert!(
-            e.contains("cannot load the ONNX Runtime library") && e.contains("graspd-not-ort-"),
-            "{e}"
         );
     }
 }

@@ -32,7 +32,7 @@ pub mod view_fusion;
 pub use depth_to_cloud::{CloudFrame, PixelCloud, back_project, depth_to_cloud};
 pub use grasp_type_detection::{
     GraspTypeModel, ModelError, TypeMaps, attention_pixel, bilinear_taps, choose_type,
-    init_onnx_runtime, resized_planes, type_probabilities,
+    resized_planes, type_probabilities,
 };
 pub use information::{
     GraspInformation, InformationParams, PerceptionReport, PerceptionTimings, ProbabilityMaps,

@@ -23,7 +23,7 @@
 use super::detector::{
     ContactEvent, Detection, DetectorSample, EventDetector, Material, ModelFreeDetector,
 };
-use crate::perception::grasp_type_detection::{ModelError, fmt_dims, runtime_env, tensor_info};
+use crate::onnx_runtime::{RuntimeError, fmt_dims, runtime_env, tensor_info};
 use ort::session::Session;
 use ort::value::{TensorElementType, TensorRef};
 use std::path::Path;
@@ -50,7 +50,7 @@ const OUT_MATERIAL: &str = "material_logits";
 pub enum TactileModelError {
     /// ONNX Runtime itself is missing or failed to load.
     #[error(transparent)]
-    Runtime(ModelError),
+    Runtime(RuntimeError),
     #[error("cannot load the tactile model {source_name}: {reason}")]
     Load { source_name: String, reason: String },
     #[error(

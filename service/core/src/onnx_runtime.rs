@@ -1,0 +1,146 @@
+//! The process-wide ONNX Runtime that graspd's networks run in (the grasp-type network,
+//! `perception::grasp_type_detection`; the tactile detector, `tactile::lstm_detector`): `ort`
+//! loads the library at run time, from an explicit path or `$ORT_DYLIB_PATH`, once per
+//! process; and the helpers both models' contract checks use.
+
+use ort::environment::Environment;
+use ort::value::{TensorElementType, ValueType};
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, PoisonError};
+use thiserror::Error;
+
+/// The environment variable naming the ONNX Runtime library when no path is given.
+pub const ORT_DYLIB_ENV: &str = "ORT_DYLIB_PATH";
+
+/// Why ONNX Runtime is not there.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum RuntimeError {
+    #[error(
+        "no ONNX Runtime library: pass its path or set {ORT_DYLIB_ENV} \
+         (scripts/fetch-onnxruntime.sh fetches libonnxruntime.so.1.31.1)"
+    )]
+    NoRuntime,
+    #[error("cannot load the ONNX Runtime library {}: {reason}", path.display())]
+    Load { path: PathBuf, reason: String },
+}
+
+/// The process-wide ONNX Runtime: ort loads one library and allows one environment per process.
+struct Runtime {
+    path: PathBuf,
+    env: Environment,
+}
+
+static RUNTIME: Mutex<Option<Runtime>> = Mutex::new(None);
+
+/// Loads ONNX Runtime from `dylib`, else from `$ORT_DYLIB_PATH`, once per process.
+///
+/// Later calls succeed without loading anything (a process holds a single runtime; a different
+/// path is logged and ignored), but a given path that does not exist is always an error naming
+/// it. Errors name the library's path, or say that none was given.
+pub fn init_onnx_runtime(dylib: Option<&Path>) -> Result<(), RuntimeError> {
+    runtime_env(dylib).map(|_| ())
+}
+
+pub(crate) fn runtime_env(dylib: Option<&Path>) -> Result<Environment, RuntimeError> {
+    let missing = |p: &Path| RuntimeError::Load {
+        path: p.to_path_buf(),
+        reason: "no such file (scripts/fetch-onnxruntime.sh fetches it)".into(),
+    };
+    if let Some(p) = dylib
+        && !p.is_file()
+    {
+        return Err(missing(p));
+    }
+    let mut rt = RUNTIME.lock().unwrap_or_else(PoisonError::into_inner);
+    if let Some(rt) = rt.as_ref() {
+        if let Some(p) = dylib
+            && std::path::absolute(p).ok().as_ref() != Some(&rt.path)
+        {
+            tracing::warn!(
+                requested = %p.display(),
+                loaded = %rt.path.display(),
+                "ONNX Runtime is already loaded; a process can hold only one"
+            );
+        }
+        return Ok(rt.env.clone());
+    }
+    let requested = match dylib {
+        Some(p) => Some(p.to_path_buf()),
+        None => std::env::var_os(ORT_DYLIB_ENV)
+            .filter(|s| !s.is_empty())
+            .map(PathBuf::from),
+    };
+    if let Some(p) = &requested
+        && !p.is_file()
+    {
+        return Err(missing(p));
+    }
+    let path = requested.ok_or(RuntimeError::NoRuntime)?;
+    // Absolute, so that ort does not look for a relative path next to the executable first.
+    let path = std::path::absolute(&path).unwrap_or(path);
+    let fail = |reason: String| RuntimeError::Load {
+        path: path.clone(),
+        reason,
+    };
+    let env = ort::init_from(&path)
+        .map_err(|e| fail(e.to_string()))?
+        .with_name("graspd")
+        .with_telemetry(false)
+        .build()
+        .map_err(|e| fail(e.to_string()))?;
+    *rt = Some(Runtime {
+        path,
+        env: env.clone(),
+    });
+    Ok(env)
+}
+
+/// Formats a shape, dynamic dimensions by their symbol or `?`.
+pub(crate) fn fmt_dims(dims: &[i64], symbols: &[String]) -> String {
+    let parts: Vec<String> = dims
+        .iter()
+        .enumerate()
+        .map(|(i, &d)| match symbols.get(i).filter(|s| !s.is_empty()) {
+            Some(sym) if d < 0 => sym.clone(),
+            _ if d < 0 => "?".into(),
+            _ => d.to_string(),
+        })
+        .collect();
+    format!("[{}]", parts.join(", "))
+}
+
+/// A tensor's element type, shape and dimension symbols; None for a non-tensor.
+pub(crate) fn tensor_info(t: &ValueType) -> Option<(TensorElementType, &[i64], &[String])> {
+    match t {
+        ValueType::Tensor {
+            ty,
+            shape,
+            dimension_symbols,
+        } => Some((*ty, &shape[..], &dimension_symbols[..])),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_unloadable_library_is_named() {
+        let path = std::env::temp_dir().join(format!("graspd-not-ort-{}.so", std::process::id()));
+        std::fs::write(&path, b"not a shared library").unwrap();
+        if RUNTIME
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .is_some()
+        {
+            return;
+        }
+        let e = init_onnx_runtime(Some(&path)).unwrap_err().to_string();
+        std::fs::remove_file(&path).ok();
+        assert!(
+            e.contains("cannot load the ONNX Runtime library") && e.contains("graspd-not-ort-"),
+            "{e}"
+        );
+    }
+}
