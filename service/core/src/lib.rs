@@ -8,6 +8,7 @@ pub mod grasp_type;
 pub mod hand;
 pub mod onnx_runtime;
 pub mod perception;
+pub mod plan_overlay;
 pub mod planning;
 pub mod tactile;
 

@@ -13,16 +13,17 @@
 //! - [`segmentation`]: support-plane removal, Euclidean clustering and the choice of the target
 //!   object (hint pixel, hint box, saliency, image centre).
 //! - [`roi`]: mean-shift regions of the saliency map; the ROI.
-//! - [`overlay`]: the picture of a plan for people.
 //! - [`information`]: the whole chain from a decoded frame to Ω = {ROI, grasp type, attention
 //!   point}.
 //! - [`view_fusion`]: further views of the same object (camera-to-world known) added to the
 //!   first view's object points.
+//!
+//! The picture of a plan for people, drawn over what perception saw, is [`crate::plan_overlay`]:
+//! it needs the plan, and perception sits below planning.
 
 pub mod depth_to_cloud;
 pub mod grasp_type_detection;
 pub mod information;
-pub mod overlay;
 pub mod rgbd;
 pub mod roi;
 pub mod saliency;
@@ -38,7 +39,6 @@ pub use information::{
     GraspInformation, InformationParams, PerceptionReport, PerceptionTimings, ProbabilityMaps,
     TypeDetection, grasp_information,
 };
-pub use overlay::{draw_overlay, project};
 pub use rgbd::{
     CameraIntrinsics, ColorEncoding, DecodedFrame, DepthEncoding, ImageData, RgbdFrame, RgbdLimits,
     WireImage, camera_pose, sniff_encoding,

@@ -14,6 +14,7 @@ mod plan_assembly;
 mod planner;
 pub mod quality;
 pub mod robustness;
+mod scene;
 pub mod search_context;
 pub mod slot_set;
 #[cfg(test)]

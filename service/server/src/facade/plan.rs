@@ -7,8 +7,9 @@ use super::{
 use graspd_core::perception::segmentation::SegmentationParams;
 use graspd_core::perception::{
     DecodedFrame, FusionReport, GraspInformation, InformationParams, RgbdFrame, RgbdLimits,
-    draw_overlay, fuse_views, grasp_information,
+    fuse_views, grasp_information,
 };
+use graspd_core::plan_overlay::draw_overlay;
 use graspd_core::planning::PlaneSource;
 use graspd_core::{FieldError, GraspPlan, HandDescription, PlanHints, PlanInput};
 

@@ -1,4 +1,5 @@
-//! A picture of a plan for people (issue 3): the colour image with the heat map of s* (or the ROI
+//! A picture of a plan for people (issue 3), drawn over what perception saw (so it sits above
+//! both perception and planning): the colour image with the heat map of s* (or the ROI
 //! tinted when no model ran), the ROI box, the attention point, the projected contacts, the
 //! pregrasping opposition and the approach from the pre-grasp to the grasp pose.
 //!
@@ -6,9 +7,8 @@
 //! white ring with a red centre, opposition cyan, contacts green, approach magenta, heat map red
 //! with the probability as opacity.
 
-use super::information::GraspInformation;
-use super::rgbd::DecodedFrame;
-use crate::GraspPlan;
+use crate::perception::{DecodedFrame, GraspInformation};
+use crate::planning::GraspPlan;
 use image::{ImageFormat, Rgb, RgbImage};
 use imageproc::drawing::{
     draw_filled_circle_mut, draw_hollow_circle_mut, draw_hollow_rect_mut, draw_line_segment_mut,
