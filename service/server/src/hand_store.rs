@@ -65,6 +65,24 @@ pub struct StoredOverrides {
     pub thumb: Option<String>,
 }
 
+impl StoredOverrides {
+    /// The overrides a registration asks for, as either transport received them: an empty
+    /// name or list means "detect it".
+    pub fn requested(palm: Option<String>, fingertips: Vec<String>, thumb: Option<String>) -> Self {
+        let name = |s: Option<String>| s.map(|s| s.trim().to_string()).filter(|s| !s.is_empty());
+        let fingertips: Vec<String> = fingertips
+            .into_iter()
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect();
+        Self {
+            palm: name(palm),
+            fingertips: (!fingertips.is_empty()).then_some(fingertips),
+            thumb: name(thumb),
+        }
+    }
+}
+
 /// `hand.toml` of a registered hand.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -94,6 +112,36 @@ pub struct HandUpload {
     pub text: String,
     pub assets: Vec<Asset>,
     pub overrides: StoredOverrides,
+}
+
+impl HandUpload {
+    /// The registration rules both transports share, on what they decoded: a parametric
+    /// description (`parametric`) is not registered, a model document is required; `model`
+    /// gives its format (named, or as `ModelFormat::parse` reads it), text, assets and
+    /// overrides. Errors name the field.
+    pub fn from_request(
+        name: String,
+        parametric: bool,
+        model: Option<(ModelFormat, String, Vec<Asset>, StoredOverrides)>,
+    ) -> Result<Self, FieldError> {
+        if parametric {
+            return Err(FieldError::new(
+                "hand",
+                "parametric descriptions are not registered; send them inline as \
+                 hand_description with each plan, or register a robot description in model",
+            ));
+        }
+        let (format, text, assets, overrides) = model.ok_or_else(|| {
+            FieldError::new("model", "missing: give the hand's MJCF or URDF document")
+        })?;
+        Ok(Self {
+            name,
+            format,
+            text,
+            assets,
+            overrides,
+        })
+    }
 }
 
 /// A hand read from its model: the kinematics and the description derived from them.
@@ -391,6 +439,34 @@ pub fn register(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The registration rules both transports decode into: a parametric description is
+    /// refused on `hand`, a missing model on `model`; empty overrides mean "detect".
+    #[test]
+    fn registration_rules_have_one_home() {
+        let model = || {
+            let o = StoredOverrides::requested(
+                Some("  ".into()),
+                vec![" a ".into(), "".into()],
+                Some(" th ".into()),
+            );
+            Some((ModelFormat::Mjcf, "<mujoco/>".to_string(), Vec::new(), o))
+        };
+        let e = HandUpload::from_request("h".into(), true, model()).unwrap_err();
+        assert_eq!(e.field, "hand");
+        let e = HandUpload::from_request("h".into(), false, None).unwrap_err();
+        assert_eq!(e.field, "model");
+        let u = HandUpload::from_request("h".into(), false, model()).unwrap();
+        assert_eq!(
+            u.overrides,
+            StoredOverrides {
+                palm: None,
+                fingertips: Some(vec!["a".into()]),
+                thumb: Some("th".into()),
+            }
+        );
+        assert!(StoredOverrides::requested(None, Vec::new(), None) == StoredOverrides::default());
+    }
 
     #[test]
     fn paths_and_names_are_checked() {

@@ -284,37 +284,23 @@ pub fn hand_to_proto(h: &HandDescription) -> pb::HandDescription {
 pub fn register_request_from_proto(
     r: pb::RegisterHandRequest,
 ) -> Result<(HandUpload, bool), FieldError> {
-    if r.hand.is_some() {
-        return Err(FieldError::new(
-            "hand",
-            "parametric descriptions are not registered; send them inline as hand_description with each plan, or register a robot description in model",
-        ));
-    }
-    let model = r.model.ok_or_else(|| {
-        FieldError::new("model", "missing: give the hand's MJCF or URDF document")
-    })?;
-    let format = ModelFormat::parse(&model.format, "model.format")?;
-    Ok((
-        HandUpload {
-            name: r.name,
-            format,
-            text: model.text,
-            assets: model
-                .assets
+    let model = match r.model {
+        Some(m) => Some((
+            ModelFormat::parse(&m.format, "model.format")?,
+            m.text,
+            m.assets
                 .into_iter()
                 .map(|a| Asset {
                     path: a.path,
                     data: a.data,
                 })
                 .collect(),
-            overrides: StoredOverrides {
-                palm: model.palm.filter(|s| !s.is_empty()),
-                fingertips: (!model.fingertips.is_empty()).then_some(model.fingertips),
-                thumb: model.thumb.filter(|s| !s.is_empty()),
-            },
-        },
-        r.replace,
-    ))
+            StoredOverrides::requested(m.palm, m.fingertips, m.thumb),
+        )),
+        None => None,
+    };
+    let upload = HandUpload::from_request(r.name, r.hand.is_some(), model)?;
+    Ok((upload, r.replace))
 }
 
 pub fn registered_to_proto(r: &RegisteredHand) -> pb::RegisterHandResponse {

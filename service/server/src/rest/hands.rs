@@ -112,7 +112,7 @@ fn from_multipart(parts: Vec<Part>) -> Result<(HandUpload, bool), ApiError> {
     let mut format: Option<String> = None;
     let mut model: Option<(Option<String>, String)> = None;
     let mut assets = Vec::new();
-    let mut overrides = StoredOverrides::default();
+    let (mut palm, mut thumb, mut fingertips) = (None, None, Vec::new());
     let mut replace = false;
     let text = |field: &str, bytes: &[u8]| -> Result<String, ApiError> {
         String::from_utf8(bytes.to_vec())
@@ -138,16 +138,13 @@ fn from_multipart(parts: Vec<Part>) -> Result<(HandUpload, bool), ApiError> {
             }
             "name" if name.is_none() => name = Some(text("name", bytes)?.trim().to_string()),
             "format" if format.is_none() => format = Some(text("model.format", bytes)?),
-            "palm" => overrides.palm = Some(text("model.palm", bytes)?.trim().to_string()),
-            "thumb" => overrides.thumb = Some(text("model.thumb", bytes)?.trim().to_string()),
+            "palm" => palm = Some(text("model.palm", bytes)?),
+            "thumb" => thumb = Some(text("model.thumb", bytes)?),
             "fingertips" => {
-                overrides.fingertips = Some(
-                    text("model.fingertips", bytes)?
-                        .split(',')
-                        .map(|s| s.trim().to_string())
-                        .filter(|s| !s.is_empty())
-                        .collect(),
-                )
+                fingertips = text("model.fingertips", bytes)?
+                    .split(',')
+                    .map(str::to_string)
+                    .collect()
             }
             "replace" => {
                 replace = match text("replace", bytes)?.trim() {
@@ -169,37 +166,28 @@ fn from_multipart(parts: Vec<Part>) -> Result<(HandUpload, bool), ApiError> {
             }
         }
     }
-    let Some((model_file, model_text)) = model else {
-        return Err(ApiError::invalid(FieldError::new(
-            "model",
-            "the multipart upload has no file part named 'model'",
-        )));
+    // The form's own rule: without a 'format' part the model file's name gives it.
+    let model = match model {
+        Some((model_file, model_text)) => {
+            let format = match format {
+                Some(f) => ModelFormat::parse(&f, "model.format")?,
+                None => model_file
+                    .as_deref()
+                    .and_then(|f| ModelFormat::from_path(std::path::Path::new(f)))
+                    .ok_or_else(|| {
+                        ApiError::invalid(FieldError::new(
+                            "model.format",
+                            "give a 'format' part (mjcf or urdf) or a model file named *.xml or *.urdf",
+                        ))
+                    })?,
+            };
+            let overrides = StoredOverrides::requested(palm, fingertips, thumb);
+            Some((format, model_text, assets, overrides))
+        }
+        None => None,
     };
-    let format = match format {
-        Some(f) => ModelFormat::parse(&f, "model.format")?,
-        None => model_file
-            .as_deref()
-            .and_then(|f| ModelFormat::from_path(std::path::Path::new(f)))
-            .ok_or_else(|| {
-                ApiError::invalid(FieldError::new(
-                    "model.format",
-                    "give a 'format' part (mjcf or urdf) or a model file named *.xml or *.urdf",
-                ))
-            })?,
-    };
-    overrides.palm = overrides.palm.filter(|s| !s.is_empty());
-    overrides.thumb = overrides.thumb.filter(|s| !s.is_empty());
-    overrides.fingertips = overrides.fingertips.filter(|v| !v.is_empty());
-    Ok((
-        HandUpload {
-            name: name.unwrap_or_default(),
-            format,
-            text: model_text,
-            assets,
-            overrides,
-        },
-        replace,
-    ))
+    let upload = HandUpload::from_request(name.unwrap_or_default(), false, model)?;
+    Ok((upload, replace))
 }
 
 /// `POST /v1/hands` as multipart/form-data.

@@ -1345,40 +1345,26 @@ impl From<RegisteredHand> for RegisteredHandJson {
 
 /// Decodes the JSON registration; errors name the field.
 pub fn register_request_from_json(r: RegisterHandJson) -> Result<(HandUpload, bool), FieldError> {
-    if r.hand.is_some() {
-        return Err(FieldError::new(
-            "hand",
-            "parametric descriptions are not registered; send them inline as hand_description with each plan, or register a robot description in model",
-        ));
-    }
-    let model = r.model.ok_or_else(|| {
-        FieldError::new("model", "missing: give the hand's MJCF or URDF document")
-    })?;
-    let format = ModelFormat::parse(&model.format, "model.format")?;
-    let mut assets = Vec::with_capacity(model.assets.len());
-    for (i, a) in model.assets.into_iter().enumerate() {
-        let data = base64::engine::general_purpose::STANDARD
-            .decode(a.data.as_bytes())
-            .map_err(|e| {
-                FieldError::new(
-                    format!("model.assets[{i}].data"),
-                    format!("not base64: {e}"),
-                )
-            })?;
-        assets.push(Asset { path: a.path, data });
-    }
-    Ok((
-        HandUpload {
-            name: r.name,
-            format,
-            text: model.text,
-            assets,
-            overrides: StoredOverrides {
-                palm: model.palm.filter(|s| !s.is_empty()),
-                fingertips: (!model.fingertips.is_empty()).then_some(model.fingertips),
-                thumb: model.thumb.filter(|s| !s.is_empty()),
-            },
-        },
-        r.replace,
-    ))
+    let model = match r.model {
+        Some(m) => {
+            let format = ModelFormat::parse(&m.format, "model.format")?;
+            let mut assets = Vec::with_capacity(m.assets.len());
+            for (i, a) in m.assets.into_iter().enumerate() {
+                let data = base64::engine::general_purpose::STANDARD
+                    .decode(a.data.as_bytes())
+                    .map_err(|e| {
+                        FieldError::new(
+                            format!("model.assets[{i}].data"),
+                            format!("not base64: {e}"),
+                        )
+                    })?;
+                assets.push(Asset { path: a.path, data });
+            }
+            let overrides = StoredOverrides::requested(m.palm, m.fingertips, m.thumb);
+            Some((format, m.text, assets, overrides))
+        }
+        None => None,
+    };
+    let upload = HandUpload::from_request(r.name, r.hand.is_some(), model)?;
+    Ok((upload, r.replace))
 }
