@@ -222,7 +222,7 @@ async fn invalid_options_and_inline_hands_name_the_field() {
         body,
         400,
         "options.max_iterations",
-        &["must be in"],
+        &["must be within"],
     )
     .await;
 
@@ -435,4 +435,33 @@ async fn every_post_route_reads_its_body_alike() {
         .await;
     }
     assert_valid_plan_works(&server).await;
+}
+
+/// An option's range has one home (`PlannerOptions::validate`): μ = 7 is refused alike by both
+/// transports, naming the option, with the same message; one within the range is accepted.
+#[tokio::test]
+async fn an_option_is_judged_alike_on_both_transports() {
+    let server = Server::start();
+    let message = "must be within [0.01, 5], got 7";
+    let mut request = grpc_request("shadow", 0);
+    request.options.as_mut().unwrap().friction = Some(7.0);
+    expect_grpc(
+        &server,
+        request,
+        Code::InvalidArgument,
+        &["options.friction", message],
+    )
+    .await;
+    let mut body = json_request("shadow", 0);
+    body["options"]["friction"] = json!(7.0);
+    expect_rest(&server, body, 400, "options.friction", &[message]).await;
+    let mut body = json_request("shadow", 0);
+    body["options"]["friction"] = json!(4.5);
+    let response = http()
+        .post(server.rest_url("/v1/plan"))
+        .json(&body)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status().as_u16(), 200);
 }
