@@ -76,7 +76,11 @@ fn manifest(dir: &Path) -> (String, Vec<String>) {
 fn crates_depend_only_on_lower_layers_and_the_domain_on_no_transport() {
     let layer: BTreeMap<&str, u8> = LAYERS.into_iter().collect();
     let crates: Vec<(String, Vec<String>)> = members().iter().map(|d| manifest(d)).collect();
-    assert_eq!(crates.len(), LAYERS.len(), "a crate without a layer: {crates:?}");
+    assert_eq!(
+        crates.len(),
+        LAYERS.len(),
+        "a crate without a layer: {crates:?}"
+    );
     for (name, deps) in &crates {
         let own = *layer
             .get(name.as_str())
