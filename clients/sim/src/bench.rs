@@ -3,7 +3,7 @@
 //! mean plan latency, grasp types chosen) and as PNG snapshots.
 
 use crate::SimError;
-use crate::camera::{Intrinsics, RgbdImage, look_at};
+use crate::camera::{Intrinsics, look_at, save_png};
 use crate::hand::SimHand;
 use crate::object::SimObject;
 use crate::scene::{Scene, on_table};
@@ -417,16 +417,4 @@ fn per_type_table(s: &mut String, report: &BenchReport, hands: &[SimHand]) {
 /// The snapshot view: from the front-left, a little above the lifted grasp.
 fn snapshot_view() -> nalgebra::Isometry3<f64> {
     look_at(Point3::new(-0.35, -0.3, 0.35), Point3::new(0.0, 0.0, 0.12))
-}
-
-/// Writes the colour image as PNG.
-pub fn save_png(img: &RgbdImage, path: &std::path::Path) -> Result<(), SimError> {
-    image::save_buffer(
-        path,
-        &img.rgb,
-        img.intrinsics.width,
-        img.intrinsics.height,
-        image::ExtendedColorType::Rgb8,
-    )
-    .map_err(|e| SimError::Input(format!("{}: {e}", path.display())))
 }

@@ -174,3 +174,15 @@ impl RgbdImage {
         out
     }
 }
+
+/// Writes the colour image as PNG.
+pub fn save_png(img: &RgbdImage, path: &std::path::Path) -> Result<(), crate::SimError> {
+    image::save_buffer(
+        path,
+        &img.rgb,
+        img.intrinsics.width,
+        img.intrinsics.height,
+        image::ExtendedColorType::Rgb8,
+    )
+    .map_err(|e| crate::SimError::Input(format!("{}: {e}", path.display())))
+}

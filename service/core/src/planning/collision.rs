@@ -16,6 +16,9 @@ use parry3d_f64::math::{Pose3, Rot3, Vector as PVec};
 use parry3d_f64::query::PointQuery; // contains_local_point
 use parry3d_f64::shape::{Capsule, Cuboid};
 
+/// How far the hand may reach below the support plane (contact with the table surface), m.
+pub const PLANE_TOLERANCE: f64 = 0.001;
+
 /// Penetration depth below which a point is touching, not colliding, m.
 pub const DEFAULT_TOLERANCE: f64 = 0.003;
 /// Points that must collide before a configuration counts as colliding.

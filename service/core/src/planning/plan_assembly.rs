@@ -320,7 +320,7 @@ fn plan_of_final(
         clear: final_points < n
             && pre_points < n
             && app_points < n
-            && min_clearance.is_none_or(|c| c >= -super::search_context::PLANE_TOLERANCE),
+            && min_clearance.is_none_or(|c| c >= -super::collision::PLANE_TOLERANCE),
         final_points_in_collision: final_points,
         pregrasp_points_in_collision: pre_points,
         approach_points_in_collision: app_points,

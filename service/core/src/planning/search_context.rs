@@ -3,7 +3,7 @@
 //! collision check. Stage-specific feasibility lives in `opposition.rs` and `dual_stage.rs`.
 
 use super::annealing::Scored;
-use super::collision::{self, FingerContact, PosedHand};
+use super::collision::{self, FingerContact, PLANE_TOLERANCE, PosedHand};
 use super::hand_pose::{self, HandFrame, finger_frame, palm_frame};
 use super::object_shape::ObjectShape;
 use super::quality::{self, ContactPoint};
@@ -448,9 +448,6 @@ impl SearchContext<'_> {
 
 /// How far each fingertip stands off its contact while the hand approaches, m.
 pub const PRESHAPE_OPENING: f64 = 0.02;
-
-/// How far the hand may reach below the support plane (contact with the table surface), m.
-pub const PLANE_TOLERANCE: f64 = 0.001;
 
 /// Collision counts of one configuration.
 #[derive(Debug, Clone, Copy, PartialEq)]

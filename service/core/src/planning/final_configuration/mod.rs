@@ -48,10 +48,11 @@ pub mod placement;
 mod pregrasp;
 mod squeeze;
 
+use super::collision::PLANE_TOLERANCE;
 use super::kinematic_model::KinematicModel;
 use super::quality::{self, ContactPoint};
 use super::robustness::Robustness;
-use super::search_context::{PLANE_TOLERANCE, SearchContext};
+use super::search_context::SearchContext;
 use crate::error::FieldError;
 use crate::hand::kinematics::PreShape;
 use closing_sweep::{SweepContact, SweepHand, close_fingers};
