@@ -112,7 +112,7 @@ pub(super) fn candidate_order(
 fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usize, usize)> {
     let up = ctx.plane.as_ref()?.normal;
     let mid = nalgebra::Point3::from((ctx.points[a].coords + ctx.points[b].coords) / 2.0);
-    let shift = (ctx.shape.centroid - mid).dot(&up);
+    let shift = (ctx.shape.center - mid).dot(&up);
     if shift.abs() < 0.01 {
         return None;
     }
