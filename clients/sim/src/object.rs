@@ -31,6 +31,23 @@ pub const BEYOND_TABLE_5_2: [&str; 5] = [
     "gelatin_box",
 ];
 
+/// The objects of ../shared/testdata/objects/ycb (YCB 002–011, 013, 017): issue 15's "all 12
+/// shared objects". The chips can (001), from another mirror for Table 5.2, is not one of them.
+pub const SHARED_YCB: [&str; 12] = [
+    "master_chef_can",
+    "cracker_box",
+    "sugar_box",
+    "tomato_soup_can",
+    "mustard_bottle",
+    "tuna_fish_can",
+    "pudding_box",
+    "gelatin_box",
+    "potted_meat_can",
+    "banana",
+    "apple",
+    "orange",
+];
+
 /// One convex piece: its vertices in the object frame, m.
 pub type Piece = Vec<Point3<f64>>;
 
