@@ -18,7 +18,12 @@
 //! kept within its force limits ([`within_force_limits`]) instead of the planned commands.
 
 use crate::debug;
-use crate::trial::{CLOSE_S, CLOSE_SETTLE_S, Trial};
+use crate::trial::world::Trial;
+
+/// Time the close takes, from the pre-grasp through the touching commands to the squeeze, s.
+pub const CLOSE_S: f64 = 0.5;
+/// Time the hand settles after the close, s.
+pub const CLOSE_SETTLE_S: f64 = 0.4;
 
 /// Per actuator, the branches of hand bodies it moves: for each top-most body one of its
 /// degrees of freedom belongs to (through its transmission: joint, tendon or gear), that body

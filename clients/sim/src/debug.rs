@@ -3,7 +3,7 @@
 //! lift.
 
 use crate::camera::{self, Intrinsics};
-use crate::trial::Trial;
+use crate::trial::world::Trial;
 use mujoco_rs::prelude::*;
 use nalgebra::Vector3;
 

@@ -7,7 +7,7 @@
 //! lift left it. The state after the hold is restored afterwards, so the shake that follows
 //! sees the grasp the hold left.
 
-use crate::trial::Trial;
+use crate::trial::world::Trial;
 use nalgebra::Vector3;
 
 /// Time the load takes to turn to a direction, s.

@@ -25,7 +25,7 @@
 //! every actuator's own force at the end of the close instead of the plan's proportions:
 //! 149 → 145 and 217 → 220.
 
-use crate::trial::Trial;
+use crate::trial::world::{BeforeStep, Trial};
 use mujoco_rs::prelude::*;
 use nalgebra::{Point3, Vector3};
 
@@ -125,6 +125,17 @@ impl GripReflex {
             }
             trial.data.ctrl_mut()[a] = c;
         }
+    }
+}
+
+/// Armed on a trial, the reflex runs before every step.
+impl BeforeStep for GripReflex {
+    fn before_step(&mut self, trial: &mut Trial) {
+        self.apply(trial);
+    }
+
+    fn boxed_clone(&self) -> Box<dyn BeforeStep> {
+        Box::new(self.clone())
     }
 }
 
