@@ -37,7 +37,7 @@ STD = np.array([0.229, 0.224, 0.225], np.float32)
 
 
 def bilinear_taps(src, dst):
-    """Taps (i0, i1, fraction of i1) of graspd's resize (grasp_type_detection.rs)."""
+    """Taps (i0, i1, fraction of i1) of graspd's resize (perception/grasp_type/model.rs)."""
     r = src / dst
     s = np.clip((np.arange(dst) + 0.5) * r - 0.5, 0, src - 1)
     i0 = np.floor(s).astype(np.int64)

@@ -1,9 +1,10 @@
 //! The process-wide ONNX Runtime that graspd's networks run in (the grasp-type network,
-//! `perception::grasp_type_detection`; the tactile detector, `tactile::lstm_detector`): `ort`
+//! `perception::grasp_type`; the tactile detector, `tactile::lstm_detector`): `ort`
 //! loads the library at run time, from an explicit path or `$ORT_DYLIB_PATH`, once per
-//! process; and the helpers both models' contract checks use.
+//! process; the session building both models share; and the helpers their contract checks use.
 
 use ort::environment::Environment;
+use ort::session::Session;
 use ort::value::{TensorElementType, ValueType};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, PoisonError};
@@ -39,6 +40,29 @@ static RUNTIME: Mutex<Option<Runtime>> = Mutex::new(None);
 /// it. Errors name the library's path, or say that none was given.
 pub fn init_onnx_runtime(dylib: Option<&Path>) -> Result<(), RuntimeError> {
     runtime_env(dylib).map(|_| ())
+}
+
+/// Why a model's session was not built: the runtime is missing, or ort refused the model (its
+/// message; each model wraps it in its own error, naming its file).
+#[derive(Debug)]
+pub(crate) enum SessionError {
+    Runtime(RuntimeError),
+    Load(String),
+}
+
+/// A session over a model held in memory, with `intra_threads` threads inside a run.
+pub(crate) fn session_from_memory(
+    bytes: &[u8],
+    intra_threads: usize,
+) -> Result<Session, SessionError> {
+    let env = runtime_env(None).map_err(SessionError::Runtime)?;
+    let mut builder = Session::builder(&env)
+        .map_err(|e| SessionError::Load(e.to_string()))?
+        .with_intra_threads(intra_threads)
+        .map_err(|e| SessionError::Load(e.to_string()))?;
+    builder
+        .commit_from_memory(bytes)
+        .map_err(|e| SessionError::Load(e.to_string()))
 }
 
 pub(crate) fn runtime_env(dylib: Option<&Path>) -> Result<Environment, RuntimeError> {

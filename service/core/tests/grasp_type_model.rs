@@ -12,7 +12,7 @@ mod onnx_builder;
 
 use graspd_core::GraspType;
 use graspd_core::onnx_runtime::init_onnx_runtime;
-use graspd_core::perception::grasp_type_detection::{IMAGENET_MEAN, IMAGENET_STD};
+use graspd_core::perception::grasp_type::{IMAGENET_MEAN, IMAGENET_STD};
 use graspd_core::perception::{
     CameraIntrinsics, DecodedFrame, GraspTypeModel, ModelError, TypeMaps, attention_pixel,
     choose_type, type_probabilities,

@@ -8,14 +8,14 @@
 //!    pixels ([`super::roi`]);
 //! 4. with a grasp-type model: the six probability maps, P(s|O) over the ROI (Eq 4.3), and the
 //!    attention pixel by mean shift on the map of s* inside the ROI, back-projected onto the
-//!    object ([`super::grasp_type_detection`]). Without a model (or when it fails) the planner's
+//!    object ([`super::grasp_type`]). Without a model (or when it fails) the planner's
 //!    geometric rule decides the type from the object's points.
 //!
 //! The caller's attention pixel, when given, is the attention point (its nearest object pixel),
 //! whatever the model says.
 
 use super::depth_to_cloud::{CloudFrame, depth_to_cloud};
-use super::grasp_type_detection::{
+use super::grasp_type::{
     GraspTypeModel, TypeMaps, attention_pixel, choose_type, type_probabilities,
 };
 use super::rgbd::DecodedFrame;

@@ -5,7 +5,7 @@
 //!   `16UC1`/`32FC1`/16-bit PNG depth, intrinsics, depth scale, camera-to-world) and its
 //!   validated decoding into a [`DecodedFrame`].
 //! - [`depth_to_cloud`]: back-projection of the valid depth pixels into a [`PixelCloud`].
-//! - [`grasp_type_detection`]: the grasp-type network (ch. 4.2.2, ONNX Runtime): six per-pixel
+//! - [`grasp_type`]: the grasp-type network (ch. 4.2.2, ONNX Runtime): six per-pixel
 //!   probability maps, P(s|O) over the object's region (Eq 4.3), the chosen type and the
 //!   attention point.
 //! - [`saliency`]: the VOCUS2 saliency map (ch. 4.2.1); the most salient object is the default
@@ -22,7 +22,7 @@
 //! it needs the plan, and perception sits below planning.
 
 pub mod depth_to_cloud;
-pub mod grasp_type_detection;
+pub mod grasp_type;
 pub mod information;
 pub mod rgbd;
 pub mod roi;
@@ -31,7 +31,7 @@ pub mod segmentation;
 pub mod view_fusion;
 
 pub use depth_to_cloud::{CloudFrame, PixelCloud, back_project, depth_to_cloud};
-pub use grasp_type_detection::{
+pub use grasp_type::{
     GraspTypeModel, ModelError, TypeMaps, attention_pixel, bilinear_taps, choose_type,
     resized_planes, type_probabilities,
 };

@@ -23,7 +23,7 @@
 use super::detector::{
     ContactEvent, Detection, DetectorSample, EventDetector, Material, ModelFreeDetector,
 };
-use crate::onnx_runtime::{RuntimeError, fmt_dims, runtime_env, tensor_info};
+use crate::onnx_runtime::{RuntimeError, SessionError, fmt_dims, session_from_memory, tensor_info};
 use ort::session::Session;
 use ort::value::{TensorElementType, TensorRef};
 use std::path::Path;
@@ -136,18 +136,13 @@ impl TactileModel {
     /// Loads a model from memory (e.g. a copy embedded in the binary); `source_name` names it in
     /// errors and logs.
     pub fn from_bytes(bytes: &[u8], source_name: &str) -> Result<Self, TactileModelError> {
-        let env = runtime_env(None).map_err(TactileModelError::Runtime)?;
-        let load_err = |reason: String| TactileModelError::Load {
-            source_name: source_name.to_string(),
-            reason,
-        };
-        let mut builder = Session::builder(&env)
-            .map_err(|e| load_err(e.to_string()))?
-            .with_intra_threads(1)
-            .map_err(|e| load_err(e.to_string()))?;
-        let session = builder
-            .commit_from_memory(bytes)
-            .map_err(|e| load_err(e.to_string()))?;
+        let session = session_from_memory(bytes, 1).map_err(|e| match e {
+            SessionError::Runtime(e) => TactileModelError::Runtime(e),
+            SessionError::Load(reason) => TactileModelError::Load {
+                source_name: source_name.to_string(),
+                reason,
+            },
+        })?;
         let contract = check_contract(&session).map_err(|reason| TactileModelError::Contract {
             source_name: source_name.to_string(),
             reason,
