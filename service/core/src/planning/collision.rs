@@ -8,7 +8,7 @@
 //! contacts themselves and sensor noise do not; a configuration collides when at least
 //! `min_points` points do (single stray points are noise).
 
-use super::types::Pose;
+use super::grasp_plan::Pose;
 use crate::cloud::{CloudIndex, Plane};
 use crate::hand::HandDescription;
 use nalgebra::{Point3, Vector3};

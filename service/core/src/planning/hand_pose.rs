@@ -2,8 +2,8 @@
 //! the h1 side to the h2 side, palm at the height h that R (Eq 5.4) assumed, and a pre-grasp pose
 //! backed off along the approach.
 
+use super::grasp_plan::Pose;
 use super::object_shape::ObjectShape;
-use super::types::Pose;
 use nalgebra::{Matrix3, Point3, Rotation3, UnitQuaternion, Vector3};
 
 /// Orthonormal hand frame: x closing (h1 → h2), y across the fingers, z approach (palm → object).

@@ -6,11 +6,12 @@
 use super::dual_stage::SearchOutcome;
 use super::ferrari_canny::{WrenchModel, ferrari_canny};
 use super::final_configuration::FinalConfiguration;
+use super::grasp_plan::*;
 use super::kinematic_model::KinematicModel;
 use super::quality::ContactPoint;
+use super::request::*;
 use super::scene::Scene;
 use super::search_context::SearchContext;
-use super::types::*;
 use crate::error::{FieldError, PlanError};
 use crate::grasp_type::{GraspType, HandPart};
 use crate::hand::PALM;

@@ -3,14 +3,15 @@
 
 use super::dual_stage;
 use super::final_configuration;
+use super::grasp_plan::*;
 use super::kinematic_model::KinematicModel;
 use super::object_shape::ObjectShape;
 use super::plan_assembly::{assemble, final_plan};
+use super::request::*;
 use super::scene::{complete_unseen, separate_support_plane};
 use super::search_context::SearchContext;
 use super::type_choice::{self, TypeAttempt, plausible_types};
 use super::type_rule;
-use super::types::*;
 use crate::cloud::{CloudIndex, LazyNormals, PointCloud};
 use crate::error::{FieldError, PlanError};
 use crate::grasp_type::GraspType;

@@ -1,7 +1,8 @@
 //! The scene a plan is made in (Algorithm 4, first steps): the support plane separated from
 //! the object's points (given, detected, or none), and a single view's unseen side completed.
 
-use super::types::*;
+use super::grasp_plan::*;
+use super::request::*;
 use crate::cloud::{
     MIN_POINTS, Orientation, Plane, PointCloud, RansacParams, detect_support_plane,
     symmetric_completion,

@@ -4,11 +4,12 @@
 
 use super::annealing::Scored;
 use super::collision::{self, FingerContact, PLANE_TOLERANCE, PosedHand};
+use super::grasp_plan::Pose;
 use super::hand_pose::{self, HandFrame, finger_frame, palm_frame};
 use super::object_shape::ObjectShape;
 use super::quality::{self, ContactPoint};
+use super::request::PlannerOptions;
 use super::robustness::{Robustness, resisted_force, robustness, robustness_above};
-use super::types::{PlannerOptions, Pose};
 use crate::cloud::{CloudIndex, LazyNormals, Plane};
 use crate::grasp_type::HandPart;
 use crate::hand::{HandDescription, ResolvedGrasp};

@@ -2,8 +2,8 @@
 //! the search context of a built-in hand on it.
 
 use super::object_shape::ObjectShape;
+use super::request::PlannerOptions;
 use super::search_context::SearchContext;
-use super::types::PlannerOptions;
 use crate::cloud::{CloudIndex, LazyNormals, Orientation, Plane};
 use crate::grasp_type::GraspType;
 use crate::hand::{HandCatalog, HandDescription, ResolvedGrasp};

@@ -4,7 +4,7 @@
 //! (docs/final-configuration.md, "Grasp types").
 
 use super::final_configuration::{FIRM_ROBUSTNESS, FinalConfiguration};
-use super::types::StageStats;
+use super::grasp_plan::StageStats;
 use crate::hand::{HandDescription, ResolvedGrasp};
 use std::time::Instant;
 

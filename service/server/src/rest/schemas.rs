@@ -335,7 +335,7 @@ doc_schema!(
     "PlannerOptions",
     shape(
         &PlannerOptions::default(),
-        "Every planner parameter; unset ones take their defaults (PlannerOptions in service/core/src/planning/types.rs). The properties and their types are those of the defaults; fields that default to null take the documented type."
+        "Every planner parameter; unset ones take their defaults (PlannerOptions in service/core/src/planning/request.rs). The properties and their types are those of the defaults; fields that default to null take the documented type."
     )
 );
 
