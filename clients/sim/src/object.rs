@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 /// The objects of the dissertation's Table 5.2, in its order.
 pub const TABLE_5_2: [&str; 8] = [
-    "chips_can",
+    CHIPS_CAN,
     "tomato_soup_can",
     "tuna_fish_can",
     "potted_meat_can",
@@ -31,22 +31,14 @@ pub const BEYOND_TABLE_5_2: [&str; 5] = [
     "gelatin_box",
 ];
 
-/// The objects of ../shared/testdata/objects/ycb (YCB 002–011, 013, 017): issue 15's "all 12
-/// shared objects". The chips can (001), from another mirror for Table 5.2, is not one of them.
-pub const SHARED_YCB: [&str; 12] = [
-    "master_chef_can",
-    "cracker_box",
-    "sugar_box",
-    "tomato_soup_can",
-    "mustard_bottle",
-    "tuna_fish_can",
-    "pudding_box",
-    "gelatin_box",
-    "potted_meat_can",
-    "banana",
-    "apple",
-    "orange",
-];
+/// The chips can (YCB 001): Table 5.2's, from another mirror than the other objects.
+pub const CHIPS_CAN: &str = "chips_can";
+
+/// Whether `name` is one of the objects of ../shared/testdata/objects/ycb (YCB 002–011, 013,
+/// 017): issue 15's "all 12 shared objects", every object of the standard run but the chips can.
+pub fn is_shared_ycb(name: &str) -> bool {
+    name != CHIPS_CAN && (TABLE_5_2.contains(&name) || BEYOND_TABLE_5_2.contains(&name))
+}
 
 /// One convex piece: its vertices in the object frame, m.
 pub type Piece = Vec<Point3<f64>>;
@@ -68,7 +60,7 @@ pub struct SimObject {
 /// The URDF of `name` and the folder its mesh paths are relative to.
 fn urdf_path(objects_dir: &Path, name: &str) -> Result<(PathBuf, PathBuf), SimError> {
     let ycb = objects_dir.join("ycb");
-    if name == "chips_can" {
+    if name == CHIPS_CAN {
         // The chips can comes from another mirror, with its URDF inside its own folder.
         let dir = ycb.join("001_chips_can");
         return Ok((dir.join("model.urdf"), dir));
@@ -97,7 +89,7 @@ pub fn known_objects(objects_dir: &Path) -> Vec<String> {
         })
         .unwrap_or_default();
     if objects_dir.join("ycb/001_chips_can/model.urdf").is_file() {
-        names.push("chips_can".into());
+        names.push(CHIPS_CAN.into());
     }
     names.sort();
     names
