@@ -336,6 +336,7 @@ fn well_formed_tiny_model_loads_and_runs() {
         pdc: 1.0,
         pac: 0.0,
         pac_vibration: 0.0,
+        pac_samples: vec![0.0],
         tdc: 0.0,
         tac: 0.0,
         electrodes: vec![0.0; 3],

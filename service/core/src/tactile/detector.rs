@@ -88,6 +88,9 @@ pub struct DetectorSample {
     pub pac: f64,
     /// High-frequency vibration of pac in this frame (see the module doc), counts.
     pub pac_vibration: f64,
+    /// The frame's pac samples as the driver sent them (one, or a BioTac's 22): the spectrum a
+    /// calibration reads (`calibration::features`).
+    pub pac_samples: Vec<f64>,
     pub tdc: f64,
     pub tac: f64,
     pub electrodes: Vec<f64>,
@@ -304,6 +307,7 @@ mod tests {
             pdc,
             pac: 0.0,
             pac_vibration: vib,
+            pac_samples: vec![0.0],
             tdc: 0.0,
             tac: 0.0,
             electrodes: vec![e; 19],

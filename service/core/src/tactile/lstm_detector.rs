@@ -437,6 +437,7 @@ mod tests {
             pdc: 1.0,
             pac: 2.0,
             pac_vibration: 3.0,
+            pac_samples: vec![2.0],
             tdc: 4.0,
             tac: 5.0,
             electrodes: vec![6.0, 7.0],

@@ -6,6 +6,7 @@
 //! (`pid`). `stabilizer::Stabilizer` runs it as a session; `recording` reads the CSV layout of the
 //! real BioTac recordings. Plain Rust: no transport types.
 
+pub mod calibration;
 pub mod desired_force;
 pub mod detector;
 pub mod force_estimation;
@@ -17,6 +18,9 @@ pub mod stabilizer;
 pub mod tactile_image;
 pub mod taring;
 
+pub use calibration::{
+    CalibratedDetector, Calibration, CalibrationRecording, CalibrationSettings, CalibrationSummary,
+};
 pub use desired_force::{ControlMode, DesiredForceLaw};
 pub use detector::{
     ContactEvent, Detection, EventDetector, Material, ModelFreeDetector, ModelFreeThresholds,
@@ -29,7 +33,7 @@ pub use pid::{Pid, PidGains};
 pub use recording::{LabelThresholds, Recording};
 pub use stabilizer::{
     DetectorChoice, FingerConfig, FingerReading, FingerResult, ForceUnit, Frame, FrameResult,
-    Stabilizer, StabilizerConfig, analyze, analyze_with_detectors,
+    SampleSource, Stabilizer, StabilizerConfig, analyze, analyze_with_detectors,
 };
 pub use tactile_image::TactileImage;
 pub use taring::{Baseline, ElectrodePolarity, TareConfig};

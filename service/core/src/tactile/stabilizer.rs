@@ -23,7 +23,7 @@ use super::force_estimation::{EmOptions, ForceEstimator};
 use super::layout::SensorLayout;
 use super::pid::{Pid, PidGains};
 use super::tactile_image::TactileImage;
-use super::taring::{Tare, TareConfig};
+use super::taring::{Tare, TareConfig, TaredReading};
 use crate::error::FieldError;
 use serde::{Deserialize, Serialize};
 
@@ -199,6 +199,47 @@ pub enum ForceUnit {
     Newton,
 }
 
+/// A finger's readings turned into the detector's samples exactly as a session does it (one
+/// home for a session and for fitting a calibration on recordings): tared, with the pac
+/// vibration of the module doc, and none while the baseline is still being collected.
+#[derive(Debug, Clone)]
+pub struct SampleSource {
+    tare: Tare,
+    prev_single_pac: Option<f64>,
+}
+
+impl SampleSource {
+    pub fn new(tare: TareConfig, electrodes: usize) -> Self {
+        Self {
+            tare: Tare::new(tare, electrodes),
+            prev_single_pac: None,
+        }
+    }
+
+    /// Whether the baseline is complete.
+    pub fn is_ready(&self) -> bool {
+        self.tare.is_ready()
+    }
+
+    /// The reading tared, and its detector sample when the baseline was complete before it.
+    pub fn next(&mut self, r: &FingerReading) -> (TaredReading, Option<DetectorSample>) {
+        let was_ready = self.tare.is_ready();
+        let tared = self.tare.apply(r.pdc, r.tdc, r.tac, &r.electrodes);
+        let vibration = pac_vibration(&r.pac, self.prev_single_pac);
+        self.prev_single_pac = (r.pac.len() == 1).then(|| r.pac[0]);
+        let sample = was_ready.then(|| DetectorSample {
+            pdc: tared.pdc,
+            pac: r.pac.iter().sum::<f64>() / r.pac.len() as f64,
+            pac_vibration: vibration,
+            pac_samples: r.pac.clone(),
+            tdc: tared.tdc,
+            tac: tared.tac,
+            electrodes: tared.electrodes.clone(),
+        });
+        (tared, sample)
+    }
+}
+
 /// Per-finger result of one frame.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FingerResult {
@@ -234,11 +275,10 @@ pub struct FrameResult {
 
 struct FingerState {
     config: FingerConfig,
-    tare: Tare,
+    source: SampleSource,
     sampler: WindowSampler<DetectorSample>,
     detector: Box<dyn EventDetector>,
     last_detection: Option<Detection>,
-    prev_single_pac: Option<f64>,
     pid: Pid,
 }
 
@@ -305,11 +345,10 @@ impl Stabilizer {
             .cloned()
             .zip(detectors)
             .map(|(f, detector)| FingerState {
-                tare: Tare::new(f.tare, f.layout.electrode_count()),
+                source: SampleSource::new(f.tare, f.layout.electrode_count()),
                 sampler: WindowSampler::new(config.window_length, config.stride),
                 detector,
                 last_detection: None,
-                prev_single_pac: None,
                 pid: Pid::new(config.pid),
                 config: f,
             })
@@ -481,25 +520,9 @@ impl FingerState {
         estimator: &ForceEstimator,
         unit: ForceUnit,
     ) -> FingerResult {
-        let was_ready = self.tare.is_ready();
-        let tared = self.tare.apply(r.pdc, r.tdc, r.tac, &r.electrodes);
-        let single = if r.pac.len() == 1 {
-            Some(r.pac[0])
-        } else {
-            None
-        };
-        let vibration = pac_vibration(&r.pac, self.prev_single_pac);
-        self.prev_single_pac = single;
         // Line 4: detection on t_seq (only once the baseline is complete).
-        let detection = if was_ready {
-            let sample = DetectorSample {
-                pdc: tared.pdc,
-                pac: r.pac.iter().sum::<f64>() / r.pac.len() as f64,
-                pac_vibration: vibration,
-                tdc: tared.tdc,
-                tac: tared.tac,
-                electrodes: tared.electrodes.clone(),
-            };
+        let (tared, sample) = self.source.next(r);
+        let detection = if let Some(sample) = sample {
             if self.sampler.push(sample) || self.last_detection.is_none() {
                 self.last_detection = Some(self.detector.detect(self.sampler.window()));
             }
@@ -532,7 +555,7 @@ impl FingerState {
         };
         FingerResult {
             finger: self.config.name.clone(),
-            tared: self.tare.is_ready(),
+            tared: self.source.is_ready(),
             event: detection.event,
             event_probabilities: detection.event_probabilities,
             material,

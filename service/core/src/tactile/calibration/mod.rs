@@ -1,0 +1,471 @@
+//! Calibrations (issue 16): a detector fitted in the server on a user's own labelled
+//! recordings, in seconds and without retraining a network. The recordings run through the
+//! session's own pipeline (taring and the window t_seq, `stabilizer::SampleSource`,
+//! `detector::WindowSampler`), each full window becomes the hand features of [`features`], and a
+//! [`classifier::LinearDiscriminant`] is fitted for the material (labels per recording: one of
+//! paper, foam, plastic, metal — the classes of Eq 6.4 the desired-force law knows — optionally
+//! with a kind, `plastic/eva`) and for the contact event (labels per frame). A session that
+//! names the calibration gets a [`CalibratedDetector`].
+
+pub mod classifier;
+pub mod features;
+
+use super::detector::{
+    ContactEvent, Detection, DetectorSample, EventDetector, Material, ModelFreeDetector,
+    ModelFreeThresholds, WindowSampler,
+};
+use super::stabilizer::{FingerReading, SampleSource};
+use super::taring::TareConfig;
+use crate::error::FieldError;
+use classifier::{LinearDiscriminant, class_of};
+use features::Features;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// One labelled recording of one finger.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct CalibrationRecording {
+    /// The material touched throughout (`class` or `class/kind`), if labelled.
+    pub material: Option<String>,
+    pub readings: Vec<FingerReading>,
+    /// The contact event of every reading, if labelled (as many as `readings`).
+    pub events: Option<Vec<ContactEvent>>,
+}
+
+/// How recordings become windows: as a session with these settings would see them.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationSettings {
+    /// l of t_seq.
+    pub window_length: usize,
+    /// k: every k-th reading.
+    pub stride: usize,
+    /// The fingers' taring (a session using the calibration must tare alike).
+    pub tare: TareConfig,
+}
+
+impl Default for CalibrationSettings {
+    /// Table 6.1's window (l = 32, k = 3) and the sessions' default taring.
+    fn default() -> Self {
+        Self {
+            window_length: 32,
+            stride: 3,
+            tare: TareConfig::default(),
+        }
+    }
+}
+
+/// What a calibration was fitted on.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct CalibrationSummary {
+    pub recordings: usize,
+    /// Windows per material label (class or class/kind), sorted by label.
+    pub material_windows: Vec<(String, usize)>,
+    /// Windows per event: non-contact, contact, slip.
+    pub event_windows: [usize; 3],
+    /// Wall time of the fit, ms.
+    pub fit_ms: f64,
+}
+
+/// A fitted calibration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Calibration {
+    pub name: String,
+    /// Electrodes per reading.
+    pub electrodes: usize,
+    pub settings: CalibrationSettings,
+    /// The material classifier, when recordings were labelled with two or more materials.
+    pub material: Option<LinearDiscriminant>,
+    /// The event classifier (labels non_contact, contact, slip), when frames were labelled.
+    pub events: Option<LinearDiscriminant>,
+    pub summary: CalibrationSummary,
+}
+
+impl Calibration {
+    /// Fits `recordings` (errors name `recordings[i]…`): every reading finite and with the
+    /// same electrode count; at least one recording labelled; material labels of two or more
+    /// classes of [`Material::CLASSES`] (by name, optionally `/kind`); event labels, where
+    /// given, one per reading and of two or more events. Windows are every full t_seq a session
+    /// would see; a material window counts only where its newest frame is not labelled
+    /// non-contact (a session reports no material out of contact).
+    pub fn fit(
+        name: &str,
+        recordings: &[CalibrationRecording],
+        settings: CalibrationSettings,
+    ) -> Result<Self, FieldError> {
+        let start = std::time::Instant::now();
+        if settings.window_length < 2 || settings.stride < 1 {
+            return Err(FieldError::new(
+                "window_length",
+                "a calibration needs windows of two or more samples and a stride of at least 1",
+            ));
+        }
+        let Some(electrodes) = recordings
+            .iter()
+            .find_map(|r| r.readings.first())
+            .map(|r| r.electrodes.len())
+        else {
+            return Err(FieldError::new("recordings", "no recordings with readings"));
+        };
+        for (i, rec) in recordings.iter().enumerate() {
+            validate_recording(rec, electrodes, &format!("recordings[{i}]"))?;
+        }
+        let features = Features::default();
+        let mut material_examples: Vec<(String, Vec<f64>)> = Vec::new();
+        let mut event_examples: Vec<(String, Vec<f64>)> = Vec::new();
+        for rec in recordings {
+            let mut source = SampleSource::new(settings.tare, electrodes);
+            let mut sampler: WindowSampler<DetectorSample> =
+                WindowSampler::new(settings.window_length, settings.stride);
+            for (j, reading) in rec.readings.iter().enumerate() {
+                let Some(sample) = source.next(reading).1 else {
+                    continue;
+                };
+                if !sampler.push(sample) || !sampler.is_full() {
+                    continue;
+                }
+                let x = features.of(sampler.window());
+                let event = rec.events.as_ref().map(|e| e[j]);
+                if let Some(m) = &rec.material
+                    && event != Some(ContactEvent::NonContact)
+                {
+                    material_examples.push((m.clone(), x.clone()));
+                }
+                if let Some(e) = event {
+                    event_examples.push((e.name().to_string(), x));
+                }
+            }
+        }
+        let labelled_materials = recordings.iter().any(|r| r.material.is_some());
+        let labelled_events = recordings.iter().any(|r| r.events.is_some());
+        if !labelled_materials && !labelled_events {
+            return Err(FieldError::new(
+                "recordings",
+                "no labels: give each recording its material, or its frames' events",
+            ));
+        }
+        let fit = |examples: &[(String, Vec<f64>)], field: &str| {
+            if examples.is_empty() {
+                return Err(FieldError::new(
+                    field,
+                    format!(
+                        "no full window: recordings need more than {} readings after taring",
+                        settings.window_length * settings.stride
+                    ),
+                ));
+            }
+            LinearDiscriminant::fit(examples, field).map(Some)
+        };
+        let material = if labelled_materials {
+            fit(&material_examples, "recordings[].material")?
+        } else {
+            None
+        };
+        let events = if labelled_events {
+            fit(&event_examples, "recordings[].events")?
+        } else {
+            None
+        };
+        let mut material_windows: Vec<(String, usize)> = Vec::new();
+        let mut labels: Vec<&String> = material_examples.iter().map(|(l, _)| l).collect();
+        labels.sort();
+        for l in labels {
+            match material_windows.last_mut() {
+                Some((last, n)) if last == l => *n += 1,
+                _ => material_windows.push((l.clone(), 1)),
+            }
+        }
+        let mut event_windows = [0; 3];
+        for (l, _) in &event_examples {
+            if let Some(k) = ContactEvent::ALL.iter().position(|e| e.name() == l) {
+                event_windows[k] += 1;
+            }
+        }
+        Ok(Self {
+            name: name.to_string(),
+            electrodes,
+            settings,
+            material,
+            events,
+            summary: CalibrationSummary {
+                recordings: recordings.len(),
+                material_windows,
+                event_windows,
+                fit_ms: start.elapsed().as_secs_f64() * 1e3,
+            },
+        })
+    }
+}
+
+/// The checks of [`Calibration::fit`] on one recording.
+fn validate_recording(
+    rec: &CalibrationRecording,
+    electrodes: usize,
+    field: &str,
+) -> Result<(), FieldError> {
+    if rec.readings.is_empty() {
+        return Err(FieldError::new(format!("{field}.readings"), "no readings"));
+    }
+    for (j, r) in rec.readings.iter().enumerate() {
+        let at = format!("{field}.readings[{j}]");
+        if r.electrodes.len() != electrodes {
+            return Err(FieldError::new(
+                format!("{at}.electrodes"),
+                format!(
+                    "{} electrodes; the calibration's first reading has {electrodes}",
+                    r.electrodes.len()
+                ),
+            ));
+        }
+        if r.pac.is_empty() {
+            return Err(FieldError::new(format!("{at}.pac"), "no pac sample"));
+        }
+        let values = [r.pdc, r.tdc, r.tac]
+            .into_iter()
+            .chain(r.pac.iter().copied())
+            .chain(r.electrodes.iter().copied());
+        if values.into_iter().any(|v| !v.is_finite()) {
+            return Err(FieldError::new(at, "a value is not finite"));
+        }
+    }
+    if let Some(m) = &rec.material {
+        let class = class_of(m);
+        let kind = m.split_once(classifier::KIND_SEPARATOR).map(|(_, k)| k);
+        if !Material::CLASSES.iter().any(|c| c.name() == class) || kind == Some("") {
+            return Err(FieldError::new(
+                format!("{field}.material"),
+                format!(
+                    "unknown material '{}': one of paper, foam, plastic, metal, optionally with a \
+                     kind after a slash (plastic/eva)",
+                    m.escape_debug()
+                ),
+            ));
+        }
+    }
+    if let Some(e) = &rec.events
+        && e.len() != rec.readings.len()
+    {
+        return Err(FieldError::new(
+            format!("{field}.events"),
+            format!("{} events for {} readings", e.len(), rec.readings.len()),
+        ));
+    }
+    Ok(())
+}
+
+/// The detector of a session that names a calibration: the calibration's classifiers on every
+/// full window; until the window is full, and for the event when the calibration has no event
+/// classifier, the model-free detector (`detector`), with no material; P(non-contact) from the
+/// model-free detector too when the calibration saw no window out of contact.
+#[derive(Debug, Clone)]
+pub struct CalibratedDetector {
+    calibration: Arc<Calibration>,
+    features: Features,
+    fallback: ModelFreeDetector,
+}
+
+impl CalibratedDetector {
+    pub fn new(calibration: Arc<Calibration>, fallback: ModelFreeThresholds) -> Self {
+        Self {
+            calibration,
+            features: Features::default(),
+            fallback: ModelFreeDetector::new(fallback),
+        }
+    }
+}
+
+impl EventDetector for CalibratedDetector {
+    fn detect(&mut self, window: &[DetectorSample]) -> Detection {
+        let mut d = self.fallback.detect(window);
+        let c = &self.calibration;
+        if window.len() < c.settings.window_length {
+            return d;
+        }
+        let x = self.features.of(window);
+        if let Some(events) = &c.events {
+            let mut probs = [0.0; 3];
+            for (name, q) in events.class_probabilities(&x) {
+                if let Some(k) = ContactEvent::ALL.iter().position(|e| e.name() == name) {
+                    probs[k] = q;
+                }
+            }
+            // Recordings that hold no full window out of contact (a slide starts touching)
+            // teach contact against slip only: whether the finger touches at all is then the
+            // model-free detector's, the calibration's split applied to the rest.
+            if !events
+                .labels
+                .iter()
+                .any(|l| l == ContactEvent::NonContact.name())
+            {
+                let away = d.event_probabilities[0];
+                probs = [away, (1.0 - away) * probs[1], (1.0 - away) * probs[2]];
+            }
+            let best = (0..3)
+                .max_by(|&a, &b| probs[a].total_cmp(&probs[b]))
+                .unwrap_or(0);
+            d.event = ContactEvent::ALL[best];
+            d.event_probabilities = probs;
+        }
+        if let Some(material) = &c.material {
+            let mut probs = [0.0; 4];
+            for (name, q) in material.class_probabilities(&x) {
+                if let Some(k) = Material::CLASSES.iter().position(|m| m.name() == name) {
+                    probs[k] = q;
+                }
+            }
+            let best = (0..4)
+                .max_by(|&a, &b| probs[a].total_cmp(&probs[b]))
+                .unwrap_or(0);
+            d.material = Material::CLASSES[best];
+            d.material_probabilities = Some(probs);
+        }
+        d
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tactile::{
+        FingerConfig, Frame, LayoutSpec, SensorLayout, Stabilizer, StabilizerConfig,
+    };
+
+    /// A slide over a material whose texture rings at `bin` of the pac spectrum (pretared
+    /// readings, 3 electrodes, 22 pac samples a frame), with a little per-recording noise.
+    fn slide(bin: f64, frames: usize, seed: u64) -> Vec<FingerReading> {
+        let mut x = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+        let mut noise = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x % 1000) as f64 / 1000.0 - 0.5
+        };
+        (0..frames)
+            .map(|f| FingerReading {
+                pdc: 40.0 + noise(),
+                pac: (0..22)
+                    .map(|s| {
+                        let i = (22 * f + s) as f64;
+                        50.0 * (std::f64::consts::TAU * bin * i / 128.0).sin() + 5.0 * noise()
+                    })
+                    .collect(),
+                tdc: 10.0 + noise(),
+                tac: 5.0 + noise(),
+                electrodes: vec![20.0 + noise(), 30.0 + noise(), 10.0 + noise()],
+            })
+            .collect()
+    }
+
+    fn recording(material: &str, bin: f64, seed: u64) -> CalibrationRecording {
+        CalibrationRecording {
+            material: Some(material.into()),
+            readings: slide(bin, 200, seed),
+            events: None,
+        }
+    }
+
+    fn settings() -> CalibrationSettings {
+        CalibrationSettings {
+            tare: TareConfig::pretared(),
+            ..CalibrationSettings::default()
+        }
+    }
+
+    /// Fitted on two recordings of each of two textures, a session with the calibrated
+    /// detector names the material of a third recording of each; before its window is full it
+    /// names none.
+    #[test]
+    fn a_session_with_the_calibration_names_the_material() {
+        let recs = [
+            recording("foam", 5.0, 1),
+            recording("foam", 5.0, 2),
+            recording("metal/steel", 30.0, 3),
+            recording("metal/steel", 30.0, 4),
+        ];
+        let c = Arc::new(Calibration::fit("bench", &recs, settings()).unwrap());
+        assert!(c.events.is_none());
+        assert_eq!(
+            c.material.as_ref().unwrap().labels,
+            vec!["foam", "metal/steel"]
+        );
+        // 200 readings: full windows from reading 94 on, one every third: 36 per recording.
+        assert_eq!(
+            c.summary.material_windows,
+            vec![("foam".to_string(), 72), ("metal/steel".to_string(), 72)]
+        );
+        let layout = SensorLayout::from_spec(LayoutSpec {
+            name: "pad".into(),
+            description: String::new(),
+            electrodes: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+        })
+        .unwrap();
+        for (bin, want) in [(5.0, Material::Foam), (30.0, Material::Metal)] {
+            let config = StabilizerConfig {
+                fingers: vec![FingerConfig {
+                    name: "ff".into(),
+                    layout: layout.clone(),
+                    tare: TareConfig::pretared(),
+                }],
+                ..StabilizerConfig::default()
+            };
+            let detector: Box<dyn EventDetector> = Box::new(CalibratedDetector::new(
+                c.clone(),
+                ModelFreeThresholds::default(),
+            ));
+            let mut s = Stabilizer::with_detectors(config, vec![detector]).unwrap();
+            for (i, r) in slide(bin, 150, 9).into_iter().enumerate() {
+                let out = s
+                    .step(&Frame {
+                        timestamp: i as f64 * 0.01,
+                        fingers: vec![r],
+                    })
+                    .unwrap();
+                let m = out.fingers[0].material;
+                if i < 93 {
+                    assert_eq!(m, Material::Unknown, "{i}: before the window is full");
+                } else {
+                    assert_eq!(m, want, "reading {i}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bad_recordings_are_refused_naming_the_field() {
+        let err =
+            |recs: &[CalibrationRecording]| Calibration::fit("x", recs, settings()).unwrap_err();
+        let e = err(&[recording("wood", 5.0, 1), recording("foam", 9.0, 2)]);
+        assert_eq!(e.field, "recordings[0].material");
+        assert!(e.message.contains("unknown material 'wood'"), "{e}");
+        let e = err(&[recording("foam/", 5.0, 1), recording("metal", 9.0, 2)]);
+        assert_eq!(e.field, "recordings[0].material");
+        let e = err(&[recording("foam/a", 5.0, 1), recording("foam/b", 9.0, 2)]);
+        assert_eq!(e.field, "recordings[].material");
+        assert!(e.message.contains("one class only (foam)"), "{e}");
+        let mut short = recording("metal", 9.0, 2);
+        short.readings[7].electrodes.pop();
+        let e = err(&[recording("foam", 5.0, 1), short]);
+        assert_eq!(e.field, "recordings[1].readings[7].electrodes");
+        let mut nan = recording("metal", 9.0, 2);
+        nan.readings[3].pac[4] = f64::NAN;
+        assert_eq!(
+            err(&[recording("foam", 5.0, 1), nan]).field,
+            "recordings[1].readings[3]"
+        );
+        let mut events = recording("metal", 9.0, 2);
+        events.events = Some(vec![ContactEvent::Slip; 3]);
+        let e = err(&[recording("foam", 5.0, 1), events]);
+        assert_eq!(e.field, "recordings[1].events");
+        let unlabelled = CalibrationRecording {
+            material: None,
+            ..recording("foam", 5.0, 1)
+        };
+        assert_eq!(err(&[unlabelled]).field, "recordings");
+        assert_eq!(err(&[]).field, "recordings");
+        let mut tiny = recording("foam", 5.0, 1);
+        tiny.readings.truncate(50);
+        let mut tiny2 = recording("metal", 9.0, 2);
+        tiny2.readings.truncate(50);
+        let e = err(&[tiny, tiny2]);
+        assert!(e.message.contains("no full window"), "{e}");
+    }
+}
