@@ -25,10 +25,11 @@ HAND_IMPORTS = $(if $(wildcard $(HANDS)/shadow_hand/right_hand.xml),\
 	--import-hand barrett_mjcf=$(HANDS)/barrett/wam_barrett_gripper.xml)
 
 # graspd with the built-in defaults (gRPC 0.0.0.0:50051, REST 0.0.0.0:8080), the shared hands
-# imported when present, and registered hands kept in .hands/.
+# imported when present, registered hands kept in .hands/ and tactile calibrations in
+# .calibrations/.
 run:
 	scripts/fetch-onnxruntime.sh
-	$(CARGO) run --bin graspd -- --hands-dir .hands $(HAND_IMPORTS) $(ARGS)
+	$(CARGO) run --bin graspd -- --hands-dir .hands --calibrations-dir .calibrations $(HAND_IMPORTS) $(ARGS)
 
 # The end-to-end tests start the real binaries, so build them first.
 test:

@@ -93,6 +93,7 @@ impl Server {
             "GRASPD_AUTH_TOKENS_FILE",
             "GRASPD_LOG_FORMAT",
             "GRASPD_HANDS_DIR",
+            "GRASPD_CALIBRATIONS_DIR",
             "GRASPD_IMPORT_HANDS",
             "GRASPD_TLS_CERT",
             "GRASPD_TLS_KEY",

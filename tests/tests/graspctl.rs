@@ -239,3 +239,92 @@ fn the_token_reaches_a_protected_server() {
     );
     assert!(out.status.success(), "{}", text(&out.stderr));
 }
+
+/// `graspctl tactile calibrate` on a folder of labelled recordings (a `labels.csv` naming each
+/// folder's material), then `stabilize --calibration` on a recording it was not fitted on
+/// names that material; the calibration is listed and deleted.
+#[test]
+fn tactile_calibrate_then_stabilize_with_the_calibration() {
+    let server = Server::start();
+    let slide = graspd_testkit::testdata_dir().join("tactile/biotac_slide");
+    let dir = std::env::temp_dir().join(format!("graspd-e2e-calibrate-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    for mat in ["mat17", "mat20"] {
+        std::fs::create_dir_all(dir.join(mat)).unwrap();
+        for sample in 1..=2 {
+            for kind in ["bio", "cw", "cv"] {
+                let file = format!("{mat}_{sample}_{kind}.csv");
+                std::fs::copy(slide.join(mat).join(&file), dir.join(mat).join(&file)).unwrap();
+            }
+        }
+    }
+    std::fs::write(
+        dir.join("labels.csv"),
+        "# folder,material\nmat17,foam\nmat20,metal\n",
+    )
+    .unwrap();
+    let out = graspctl(
+        &server,
+        &[
+            "tactile",
+            "calibrate",
+            dir.to_str().unwrap(),
+            "--name",
+            "slide",
+            "--pretared",
+        ],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let summary = text(&out.stdout);
+    assert!(summary.starts_with("slide: 19 electrodes"), "{summary}");
+    assert!(summary.contains("4 recordings"), "{summary}");
+    assert!(summary.contains("(in memory only)"), "{summary}");
+    assert!(
+        summary.contains("foam ") && summary.contains("metal "),
+        "{summary}"
+    );
+
+    let out = graspctl(&server, &["--json", "tactile", "calibrations"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let listed: serde_json::Value = serde_json::from_str(text(&out.stdout).trim()).unwrap();
+    assert_eq!(listed["name"], "slide");
+
+    let held_out = slide.join("mat20/mat20_15_bio.csv");
+    let out = graspctl(
+        &server,
+        &[
+            "--json",
+            "stabilize",
+            "--csv",
+            held_out.to_str().unwrap(),
+            "--fast",
+            "--pretared",
+            "--calibration",
+            "slide",
+        ],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let materials: Vec<String> = text(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .map(|v| v["fingers"][0]["material"].as_str().unwrap().to_string())
+        .filter(|m| m != "unknown")
+        .collect();
+    let metal = materials.iter().filter(|m| *m == "metal").count();
+    assert!(
+        materials.len() > 400 && metal as f64 >= 0.9 * materials.len() as f64,
+        "{metal} of {}",
+        materials.len()
+    );
+
+    let out = graspctl(&server, &["tactile", "delete", "slide"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let out = graspctl(&server, &["tactile", "delete", "slide"]);
+    assert!(!out.status.success());
+    assert!(
+        text(&out.stderr).contains("NotFound"),
+        "{}",
+        text(&out.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -15,6 +15,10 @@ const ROUTES: &[(&str, &str)] = &[
     ("GET", "/v1/hands/{name}"),
     ("GET", "/v1/stabilize"),
     ("POST", "/v1/tactile/analyze"),
+    ("GET", "/v1/tactile/calibrations"),
+    ("POST", "/v1/tactile/calibrations"),
+    ("GET", "/v1/tactile/calibrations/{name}"),
+    ("DELETE", "/v1/tactile/calibrations/{name}"),
     ("GET", "/healthz"),
     ("GET", "/readyz"),
     ("GET", "/metrics"),
@@ -133,6 +137,7 @@ async fn the_document_describes_every_route_and_agrees_with_a_real_plan() {
         let request = match *method {
             "GET" => http().get(url),
             "POST" => http().post(url).json(&serde_json::json!({})),
+            "DELETE" => http().delete(url),
             other => panic!("{other}"),
         };
         let response = request.bearer_auth(TOKEN).send().await.unwrap();

@@ -1,6 +1,7 @@
 //! `graspctl`: plan grasps on PCD/PLY clouds, list hands and replay tactile recordings, over
 //! graspd's gRPC API.
 
+mod calibrate;
 mod stabilize;
 mod summary;
 
@@ -16,6 +17,7 @@ use graspd_core::planning::PlannerMode;
 use graspd_core::{FieldError, GraspType, PlanHints, PlannerOptions};
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::grasp_planner_client::GraspPlannerClient;
+use graspd_proto::v1::tactile_stabilizer_client::TactileStabilizerClient;
 use nalgebra::{Point3, Vector3};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -63,6 +65,11 @@ enum Command {
     /// Replay a BioTac recording (CSV) through the tactile stabilization stream: a live view,
     /// then a summary (with --json: one setpoint per line on stdout, the summary on stderr).
     Stabilize(stabilize::StabilizeArgs),
+    /// Tactile calibrations: fit one on a folder of labelled recordings, list, delete.
+    Tactile {
+        #[command(subcommand)]
+        command: calibrate::TactileCommand,
+    },
 }
 
 #[derive(Debug, Args)]
@@ -227,6 +234,18 @@ pub(crate) async fn channel(server: &str) -> Result<Channel, CliError> {
 
 type Planner = GraspPlannerClient<InterceptedService<Channel, Bearer>>;
 
+pub(crate) type Tactile = TactileStabilizerClient<InterceptedService<Channel, Bearer>>;
+
+pub(crate) async fn connect_tactile(
+    server: &str,
+    token: Option<&str>,
+) -> Result<Tactile, CliError> {
+    Ok(TactileStabilizerClient::with_interceptor(
+        channel(server).await?,
+        Bearer::new(token)?,
+    ))
+}
+
 async fn connect(server: &str, token: Option<&str>) -> Result<Planner, CliError> {
     Ok(GraspPlannerClient::with_interceptor(
         channel(server).await?,
@@ -330,6 +349,9 @@ async fn run(cli: Cli) -> Result<(), CliError> {
     match &cli.command {
         Command::Stabilize(args) => {
             stabilize::run(&cli.server, cli.token.as_deref(), args, cli.json).await?
+        }
+        Command::Tactile { command } => {
+            calibrate::run(&cli.server, cli.token.as_deref(), command, cli.json).await?
         }
         Command::Plan(args) => {
             let request = convert::plan_request_to_proto(&build_request(args)?);

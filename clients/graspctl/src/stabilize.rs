@@ -15,7 +15,6 @@ use graspd_core::tactile::{
 };
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::stabilize_request::Kind;
-use graspd_proto::v1::tactile_stabilizer_client::TactileStabilizerClient;
 use std::fmt::Write as _;
 use std::io::{IsTerminal, Write as _};
 use std::path::PathBuf;
@@ -79,6 +78,10 @@ pub struct StabilizeArgs {
     /// Newtons per raw unit of Eq 6.7 (unset: forces in raw units).
     #[arg(long)]
     calibration_gain: Option<f64>,
+    /// Detect with this calibration of the server (`graspctl tactile calibrate`); the window,
+    /// the stride and the taring must be those it was fitted with.
+    #[arg(long, value_name = "NAME")]
+    calibration: Option<String>,
     /// Print no live line, only the summary.
     #[arg(long)]
     quiet: bool,
@@ -111,6 +114,7 @@ impl StabilizeArgs {
             kd: self.kd,
             alpha: self.alpha,
             calibration_gain: self.calibration_gain,
+            calibration: self.calibration.clone(),
         };
         convert::tactile_session_to_proto(&json::tactile_session_from_json(query.session()))
     }
@@ -280,10 +284,7 @@ pub async fn run(
         (Some(a), Some(b)) => b.timestamp - a.timestamp,
         _ => 0.0,
     };
-    let mut client = TactileStabilizerClient::with_interceptor(
-        crate::channel(server).await?,
-        crate::Bearer::new(token)?,
-    );
+    let mut client = crate::connect_tactile(server, token).await?;
 
     // Bounded: at most 64 frames wait in this client when the server is slower than the replay.
     let (tx, rx) = mpsc::channel(64);

@@ -5,7 +5,9 @@
 //! iterations on their images than on the synthetic ones). Each case runs twice: with the
 //! model-free detector and with the shipped LSTM model (models/tactile/tactile_detector.onnx,
 //! ONNX Runtime from `$ORT_DYLIB_PATH` or .tools/onnxruntime; skipped when neither exists). The
-//! model runs on every k-th frame (k = 3), so its cost per frame is about a third of a run.
+//! model runs on every k-th frame (k = 3), so its cost per frame is about a third of a run. The
+//! real recordings run a third time with a calibration (`tactile::calibration`) fitted at start
+//! on samples 2–3 of each material: its features and discriminant also run on every k-th frame.
 //! `cargo bench -p graspd-core --bench tactile_frame`.
 
 use graspd_core::onnx_runtime::init_onnx_runtime;
@@ -15,7 +17,10 @@ use graspd_core::tactile::stabilizer::{
     FingerConfig, FingerReading, Frame, Stabilizer, StabilizerConfig,
 };
 use graspd_core::tactile::taring::TareConfig;
-use graspd_core::tactile::{LstmDetector, Recording, TactileModel};
+use graspd_core::tactile::{
+    CalibratedDetector, Calibration, CalibrationRecording, CalibrationSettings, LstmDetector,
+    ModelFreeThresholds, Recording, TactileModel,
+};
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -43,7 +48,15 @@ fn reading(i: usize) -> FingerReading {
     }
 }
 
-fn run(fingers: usize, frames: usize, model: Option<&Arc<TactileModel>>) {
+/// Which detector a case runs.
+#[derive(Clone, Copy)]
+enum Detector<'a> {
+    ModelFree,
+    Lstm(&'a Arc<TactileModel>),
+    Calibrated(&'a Arc<Calibration>),
+}
+
+fn run(fingers: usize, frames: usize, model: Detector) {
     let input: Vec<Frame> = (0..frames)
         .map(|i| Frame {
             timestamp: i as f64 * 0.01,
@@ -60,7 +73,7 @@ fn run(fingers: usize, frames: usize, model: Option<&Arc<TactileModel>>) {
 }
 
 /// One finger over the real recordings (every `mat*/mat*_1_bio.csv`), one after the other.
-fn run_recordings(limit: usize, model: Option<&Arc<TactileModel>>) {
+fn run_recordings(limit: usize, model: Detector) {
     let dir = graspd_testkit::testdata_dir().join("tactile/biotac_slide");
     let Ok(entries) = std::fs::read_dir(&dir) else {
         println!(
@@ -94,13 +107,7 @@ fn run_recordings(limit: usize, model: Option<&Arc<TactileModel>>) {
     measure(&label, 1, TareConfig::pretared(), &input, model);
 }
 
-fn measure(
-    label: &str,
-    fingers: usize,
-    tare: TareConfig,
-    input: &[Frame],
-    model: Option<&Arc<TactileModel>>,
-) {
+fn measure(label: &str, fingers: usize, tare: TareConfig, input: &[Frame], model: Detector) {
     let config = StabilizerConfig::for_fingers(
         (0..fingers)
             .map(|f| FingerConfig {
@@ -110,21 +117,26 @@ fn measure(
             })
             .collect(),
     );
-    let mut stab = match model {
-        None => Stabilizer::new(config).unwrap(),
-        Some(m) => {
-            let detectors = (0..fingers)
-                .map(|_| Box::new(LstmDetector::new(m.clone())) as Box<dyn EventDetector>)
-                .collect();
-            Stabilizer::with_detectors(config, detectors).unwrap()
+    let detector = |_| -> Box<dyn EventDetector> {
+        match model {
+            Detector::ModelFree => Box::new(graspd_core::tactile::ModelFreeDetector::new(
+                ModelFreeThresholds::default(),
+            )),
+            Detector::Lstm(m) => Box::new(LstmDetector::new(m.clone())),
+            Detector::Calibrated(c) => Box::new(CalibratedDetector::new(
+                c.clone(),
+                ModelFreeThresholds::default(),
+            )),
         }
     };
+    let detectors = (0..fingers).map(detector).collect();
+    let mut stab = Stabilizer::with_detectors(config, detectors).unwrap();
     let label = format!(
         "{label}, {}",
-        if model.is_some() {
-            "LSTM model"
-        } else {
-            "model-free"
+        match model {
+            Detector::ModelFree => "model-free",
+            Detector::Lstm(_) => "LSTM model",
+            Detector::Calibrated(_) => "calibration",
         }
     );
     let frames = input.len();
@@ -155,12 +167,46 @@ fn main() {
     if model.is_none() {
         println!("LSTM model cases skipped: no ONNX Runtime library");
     }
-    for m in std::iter::once(None).chain(model.as_ref().map(Some)) {
+    for m in std::iter::once(Detector::ModelFree).chain(model.as_ref().map(Detector::Lstm)) {
         for fingers in [1, 3] {
             run(fingers, frames, m);
         }
         run_recordings(frames, m);
     }
+    if let Some(c) = fit_calibration() {
+        run_recordings(frames, Detector::Calibrated(&c));
+    }
+}
+
+/// A calibration on samples 2–3 of each material (the bench's recordings are samples 1).
+fn fit_calibration() -> Option<Arc<Calibration>> {
+    let dir = graspd_testkit::testdata_dir().join("tactile/biotac_slide");
+    let classes = [
+        ("mat5", "plastic"),
+        ("mat8", "paper"),
+        ("mat17", "foam"),
+        ("mat20", "metal"),
+    ];
+    let mut recordings = Vec::new();
+    for (mat, class) in classes {
+        for sample in 2..=3 {
+            let path = dir.join(mat).join(format!("{mat}_{sample}_bio.csv"));
+            let text = std::fs::read_to_string(path).ok()?;
+            let rec = Recording::from_csv(&text, None, None).expect("recording parses");
+            recordings.push(CalibrationRecording {
+                material: Some(class.into()),
+                readings: rec.rows.iter().map(|r| r.reading()).collect(),
+                events: None,
+            });
+        }
+    }
+    let settings = CalibrationSettings {
+        tare: TareConfig::pretared(),
+        ..CalibrationSettings::default()
+    };
+    Some(Arc::new(
+        Calibration::fit("bench", &recordings, settings).expect("the calibration fits"),
+    ))
 }
 
 fn load_model() -> Option<Arc<TactileModel>> {

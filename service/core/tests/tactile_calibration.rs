@@ -82,9 +82,16 @@ fn split(samples: &[Sample]) -> (Vec<&Sample>, Vec<&Sample>) {
     samples.iter().partition(|s| s.sample <= 10)
 }
 
+/// The label of a recording: its class with the material as the kind, or (with
+/// `GRASPD_CALIBRATION_LABELS=class`) the class alone, one Gaussian over unlike materials.
 fn recording(s: &Sample) -> CalibrationRecording {
+    let class_only = std::env::var("GRASPD_CALIBRATION_LABELS").is_ok_and(|v| v == "class");
     CalibrationRecording {
-        material: Some(format!("{}/{}", s.class, s.material)),
+        material: Some(if class_only {
+            s.class.to_string()
+        } else {
+            format!("{}/{}", s.class, s.material)
+        }),
         readings: s.frames.iter().map(|f| f.fingers[0].clone()).collect(),
         events: Some(s.events.clone()),
     }

@@ -103,6 +103,10 @@ pub struct Cli {
     /// at start [default: none: registered hands live in memory until the server stops].
     #[arg(long, env = "GRASPD_HANDS_DIR", value_name = "DIR")]
     pub hands_dir: Option<PathBuf>,
+    /// Directory of tactile calibrations: Calibrate stores them here and they are loaded again
+    /// at start [default: none: calibrations live in memory until the server stops].
+    #[arg(long, env = "GRASPD_CALIBRATIONS_DIR", value_name = "DIR")]
+    pub calibrations_dir: Option<PathBuf>,
     /// A hand to read at start from its MJCF (.xml) or URDF (.urdf) file, as NAME=PATH;
     /// repeatable (environment: comma-separated). Replaces the config file's `import_hands`.
     #[arg(long = "import-hand", env = "GRASPD_IMPORT_HANDS", value_name = "NAME=PATH", value_delimiter = ',', value_parser = parse_import)]
@@ -159,6 +163,7 @@ pub struct FileConfig {
     pub log: Option<String>,
     pub log_format: Option<LogFormat>,
     pub hands_dir: Option<PathBuf>,
+    pub calibrations_dir: Option<PathBuf>,
     /// `["NAME=PATH", …]`, as `--import-hand`.
     #[serde(default)]
     pub import_hands: Vec<String>,
@@ -198,6 +203,8 @@ pub struct Settings {
     pub log_format: LogFormat,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hands_dir: Option<PathBuf>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub calibrations_dir: Option<PathBuf>,
     /// `NAME=PATH` entries.
     pub import_hands: Vec<String>,
     /// PEM files of TLS (paths only: the key itself is read at start and never printed).
@@ -318,6 +325,7 @@ impl Settings {
                 .unwrap_or_else(|| "info".into()),
             log_format: cli.log_format.or(file.log_format).unwrap_or_default(),
             hands_dir: cli.hands_dir.clone().or(file.hands_dir),
+            calibrations_dir: cli.calibrations_dir.clone().or(file.calibrations_dir),
             import_hands: if cli.import_hands.is_empty() {
                 for entry in &file.import_hands {
                     parse_import(entry).map_err(|message| ConfigError::Invalid {

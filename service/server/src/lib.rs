@@ -2,6 +2,7 @@
 //! crate `graspd-core`, served by two thin transports: gRPC ([`grpc`], tonic) and REST
 //! ([`rest`], axum).
 
+pub mod calibration_store;
 pub mod config;
 pub mod facade;
 pub mod grpc;

@@ -38,6 +38,8 @@ pub enum ServeError {
     Rest(std::io::Error),
     #[error("cannot load the hands: {0}")]
     Hands(String),
+    #[error("cannot load the tactile calibrations: {0}")]
+    Calibrations(String),
     #[error("cannot load the {what}: {reason}")]
     Model { what: &'static str, reason: String },
     #[error("TLS: {0}")]
@@ -153,6 +155,11 @@ pub async fn run(
         GraspService::with_hands(settings.limits(), &settings.hand_setup())
     })
     .map_err(ServeError::Hands)?;
+    let service = match &settings.calibrations_dir {
+        Some(dir) => tokio::task::block_in_place(|| service.with_calibrations_dir(dir.clone()))
+            .map_err(ServeError::Calibrations)?,
+        None => service,
+    };
     let service = with_models(service, settings)?;
     // TLS files next: one that cannot be read, or a key that does not match, fails the start.
     let tls = settings.tls_files().map(|f| Tls::load(&f)).transpose()?;

@@ -56,6 +56,10 @@ pub enum DetectorChoice {
     /// A learned model by name (the LSTM of Eq 6.1–6.4); the caller supplies it with
     /// [`Stabilizer::with_detectors`].
     Model(String),
+    /// A calibration fitted on the user's recordings, by name (`calibration`); the caller
+    /// supplies its [`super::calibration::CalibratedDetector`] with
+    /// [`Stabilizer::with_detectors`].
+    Calibration(String),
 }
 
 /// Session parameters (issue 5 point 1).
@@ -312,6 +316,12 @@ impl Stabilizer {
                 return Err(FieldError::new(
                     "session.detector",
                     format!("model '{name}' is not loaded"),
+                ));
+            }
+            DetectorChoice::Calibration(name) => {
+                return Err(FieldError::new(
+                    "session.detector.calibration",
+                    format!("calibration '{name}' is not loaded"),
                 ));
             }
         };

@@ -5,7 +5,8 @@
 //! One file per concern: [`request`] (a plan request in domain terms), [`validate`] (the request
 //! rules the facade owns; the options' ranges are `PlannerOptions::validate`'s), [`limits`]
 //! (configured bounds, the CPU cap on options included), [`plan`], [`hands`] (catalog and
-//! registration), [`tactile`] (sessions and analysis), [`error`].
+//! registration), [`tactile`] (sessions and analysis), [`calibrations`] (tactile calibrations:
+//! fit, store, name), [`error`].
 
 use crate::hand_store;
 use graspd_core::HandCatalog;
@@ -18,6 +19,7 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicUsize;
 use std::sync::{Arc, RwLock};
 
+mod calibrations;
 mod error;
 mod hands;
 mod limits;
@@ -26,6 +28,7 @@ mod request;
 mod tactile;
 mod validate;
 
+pub use calibrations::{CalibrationInfo, CalibrationUpload, RecordingUpload};
 pub use error::ServiceError;
 pub use hands::{HandSetup, RegisteredHand};
 pub use limits::{
@@ -52,6 +55,8 @@ struct Inner {
     grasp_type_model: Option<Arc<GraspTypeModel>>,
     /// The tactile LSTM detector (method.md §5), when loaded.
     tactile_model: Option<Arc<TactileModel>>,
+    /// Tactile calibrations by name (issue 16).
+    calibrations: RwLock<calibrations::Calibrations>,
 }
 
 /// The hands: descriptions by name, the kinematics of those that have them, and where
@@ -78,6 +83,7 @@ impl GraspService {
                 tactile_sessions: Arc::new(AtomicUsize::new(0)),
                 grasp_type_model: None,
                 tactile_model: None,
+                calibrations: RwLock::default(),
             }),
         }
     }

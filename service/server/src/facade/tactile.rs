@@ -3,8 +3,9 @@
 use super::{GraspService, ServiceError, guarded};
 use graspd_core::FieldError;
 use graspd_core::tactile::{
-    DetectorChoice, EventDetector, FingerConfig, Frame, FrameResult, LayoutSpec, LstmDetector,
-    ModelFreeThresholds, SensorLayout, Stabilizer, StabilizerConfig, TactileModel, TareConfig,
+    CalibratedDetector, DetectorChoice, EventDetector, FingerConfig, Frame, FrameResult,
+    LayoutSpec, LstmDetector, ModelFreeThresholds, SensorLayout, Stabilizer, StabilizerConfig,
+    TactileModel, TareConfig,
 };
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -147,8 +148,8 @@ impl GraspService {
     }
 
     /// One detector per finger for a validated config: `model`/`lstm` needs the loaded model
-    /// and a session that fits it (errors name the field); the default takes the model when
-    /// the session fits it, else the model-free detector.
+    /// and a session that fits it, a calibration one that fits it (errors name the field); the
+    /// default takes the model when the session fits it, else the model-free detector.
     fn detectors(
         &self,
         config: &StabilizerConfig,
@@ -172,6 +173,19 @@ impl GraspService {
         };
         let model = self.inner.tactile_model.as_ref();
         match &config.detector {
+            DetectorChoice::Calibration(name) => {
+                let cal = self.session_calibration(name, config)?;
+                Ok(config
+                    .fingers
+                    .iter()
+                    .map(|_| {
+                        Box::new(CalibratedDetector::new(
+                            cal.clone(),
+                            ModelFreeThresholds::default(),
+                        )) as Box<dyn EventDetector>
+                    })
+                    .collect())
+            }
             DetectorChoice::ModelFree(t) => Ok(model_free(*t)),
             DetectorChoice::Default => Ok(match model {
                 Some(m) if tactile_fit(config, m).is_ok() => with_model(m),

@@ -96,4 +96,57 @@ impl TactileStabilizer for TactileStabilizerService {
         );
         Ok(Response::new(Box::pin(ReceiverStream::new(rx))))
     }
+
+    async fn calibrate(
+        &self,
+        request: Request<pb::CalibrateRequest>,
+    ) -> Result<Response<pb::CalibrationInfo>, Status> {
+        let upload =
+            convert::calibrate_request_from_proto(request.into_inner()).map_err(invalid)?;
+        let service = self.service.clone();
+        let info = tokio::task::spawn_blocking(move || service.calibrate(upload))
+            .await
+            .map_err(|e| Status::internal(format!("calibration task failed: {e}")))?
+            .map_err(to_status)?;
+        tracing::info!(calibration = %info.calibration.name, persisted = info.persisted, "calibration fitted");
+        Ok(Response::new(convert::calibration_info_to_proto(&info)))
+    }
+
+    async fn list_calibrations(
+        &self,
+        _request: Request<pb::ListCalibrationsRequest>,
+    ) -> Result<Response<pb::ListCalibrationsResponse>, Status> {
+        Ok(Response::new(pb::ListCalibrationsResponse {
+            calibrations: self
+                .service
+                .list_calibrations()
+                .iter()
+                .map(convert::calibration_info_to_proto)
+                .collect(),
+        }))
+    }
+
+    async fn get_calibration(
+        &self,
+        request: Request<pb::GetCalibrationRequest>,
+    ) -> Result<Response<pb::CalibrationInfo>, Status> {
+        let info = self
+            .service
+            .get_calibration(&request.into_inner().name)
+            .map_err(to_status)?;
+        Ok(Response::new(convert::calibration_info_to_proto(&info)))
+    }
+
+    async fn delete_calibration(
+        &self,
+        request: Request<pb::DeleteCalibrationRequest>,
+    ) -> Result<Response<pb::DeleteCalibrationResponse>, Status> {
+        let name = request.into_inner().name;
+        let service = self.service.clone();
+        tokio::task::spawn_blocking(move || service.delete_calibration(&name))
+            .await
+            .map_err(|e| Status::internal(format!("delete task failed: {e}")))?
+            .map_err(to_status)?;
+        Ok(Response::new(pb::DeleteCalibrationResponse {}))
+    }
 }

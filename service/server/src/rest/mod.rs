@@ -2,6 +2,7 @@
 //! facade.
 
 pub mod body;
+pub mod calibrations;
 pub mod error;
 pub mod hands;
 pub mod json;
@@ -56,6 +57,14 @@ pub fn router(runner: PlanRunner, ops: Ops) -> Router {
         .route("/v1/hands/{name}", get(hands::get))
         .route("/v1/stabilize", get(stabilize::stabilize))
         .route("/v1/tactile/analyze", post(tactile::analyze))
+        .route(
+            "/v1/tactile/calibrations",
+            get(calibrations::list).post(calibrations::calibrate),
+        )
+        .route(
+            "/v1/tactile/calibrations/{name}",
+            get(calibrations::get).delete(calibrations::delete),
+        )
         .route("/healthz", get(health))
         .route("/readyz", get(ready))
         .route("/metrics", get(metrics_text))

@@ -276,6 +276,14 @@ doc_schema!(
 );
 
 doc_schema!(
+    TareConfigDoc,
+    "TareConfig",
+    object(
+        "Taring in the domain's serde form (graspd_core::tactile::TareConfig): {\"baseline\": {\"first_frames\": 50} or \"none\" (pretared), \"electrode_polarity\": \"falling\" | \"rising\"}"
+    )
+);
+
+doc_schema!(
     QualityDoc,
     "Quality",
     shape(
@@ -399,8 +407,15 @@ doc_schema!(
                 .required("model")
                 .additional_properties(Some(AdditionalProperties::FreeForm(false)))
         )
+        .item(
+            ObjectBuilder::new()
+                .schema_type(Type::Object)
+                .property("calibration", ObjectBuilder::new().schema_type(Type::String))
+                .required("calibration")
+                .additional_properties(Some(AdditionalProperties::FreeForm(false)))
+        )
         .description(Some(
-            "{\"model_free\": {thresholds}} or {\"model\": \"lstm\"} (the learned LSTM detector of models/tactile; 400 when none is loaded or the session does not fit it). Absent: the loaded model when the session fits it, else model_free with default thresholds"
+            "{\"model_free\": {thresholds}}, {\"model\": \"lstm\"} (the learned LSTM detector of models/tactile; 400 when none is loaded or the session does not fit it) or {\"calibration\": \"name\"} (a calibration of POST /v1/tactile/calibrations; 400 when unknown or when the session's window, stride, electrodes or taring differ from its). Absent: the loaded model when the session fits it, else model_free with default thresholds"
         ))
     )
 );

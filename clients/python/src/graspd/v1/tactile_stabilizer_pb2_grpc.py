@@ -39,12 +39,57 @@ class TactileStabilizerStub:
                 request_serializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.StabilizeRequest.SerializeToString,
                 response_deserializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.StabilizationSetpoint.FromString,
                 _registered_method=True)
+        self.Calibrate = channel.unary_unary(
+                '/graspd.v1.TactileStabilizer/Calibrate',
+                request_serializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.CalibrateRequest.SerializeToString,
+                response_deserializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.CalibrationInfo.FromString,
+                _registered_method=True)
+        self.ListCalibrations = channel.unary_unary(
+                '/graspd.v1.TactileStabilizer/ListCalibrations',
+                request_serializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.ListCalibrationsRequest.SerializeToString,
+                response_deserializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.ListCalibrationsResponse.FromString,
+                _registered_method=True)
+        self.GetCalibration = channel.unary_unary(
+                '/graspd.v1.TactileStabilizer/GetCalibration',
+                request_serializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.GetCalibrationRequest.SerializeToString,
+                response_deserializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.CalibrationInfo.FromString,
+                _registered_method=True)
+        self.DeleteCalibration = channel.unary_unary(
+                '/graspd.v1.TactileStabilizer/DeleteCalibration',
+                request_serializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.DeleteCalibrationRequest.SerializeToString,
+                response_deserializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.DeleteCalibrationResponse.FromString,
+                _registered_method=True)
 
 
 class TactileStabilizerServicer:
     """Missing associated documentation comment in .proto file."""
 
     def Stabilize(self, request_iterator, context):
+        """Missing associated documentation comment in .proto file."""
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def Calibrate(self, request, context):
+        """Fits a calibration on labelled recordings and stores it under its name (issue 16).
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def ListCalibrations(self, request, context):
+        """Missing associated documentation comment in .proto file."""
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def GetCalibration(self, request, context):
+        """Missing associated documentation comment in .proto file."""
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
+    def DeleteCalibration(self, request, context):
         """Missing associated documentation comment in .proto file."""
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
         context.set_details('Method not implemented!')
@@ -57,6 +102,26 @@ def add_TactileStabilizerServicer_to_server(servicer, server):
                     servicer.Stabilize,
                     request_deserializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.StabilizeRequest.FromString,
                     response_serializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.StabilizationSetpoint.SerializeToString,
+            ),
+            'Calibrate': grpc.unary_unary_rpc_method_handler(
+                    servicer.Calibrate,
+                    request_deserializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.CalibrateRequest.FromString,
+                    response_serializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.CalibrationInfo.SerializeToString,
+            ),
+            'ListCalibrations': grpc.unary_unary_rpc_method_handler(
+                    servicer.ListCalibrations,
+                    request_deserializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.ListCalibrationsRequest.FromString,
+                    response_serializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.ListCalibrationsResponse.SerializeToString,
+            ),
+            'GetCalibration': grpc.unary_unary_rpc_method_handler(
+                    servicer.GetCalibration,
+                    request_deserializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.GetCalibrationRequest.FromString,
+                    response_serializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.CalibrationInfo.SerializeToString,
+            ),
+            'DeleteCalibration': grpc.unary_unary_rpc_method_handler(
+                    servicer.DeleteCalibration,
+                    request_deserializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.DeleteCalibrationRequest.FromString,
+                    response_serializer=graspd_dot_v1_dot_tactile__stabilizer__pb2.DeleteCalibrationResponse.SerializeToString,
             ),
     }
     generic_handler = grpc.method_handlers_generic_handler(
@@ -86,6 +151,114 @@ class TactileStabilizer:
             '/graspd.v1.TactileStabilizer/Stabilize',
             graspd_dot_v1_dot_tactile__stabilizer__pb2.StabilizeRequest.SerializeToString,
             graspd_dot_v1_dot_tactile__stabilizer__pb2.StabilizationSetpoint.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def Calibrate(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/graspd.v1.TactileStabilizer/Calibrate',
+            graspd_dot_v1_dot_tactile__stabilizer__pb2.CalibrateRequest.SerializeToString,
+            graspd_dot_v1_dot_tactile__stabilizer__pb2.CalibrationInfo.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def ListCalibrations(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/graspd.v1.TactileStabilizer/ListCalibrations',
+            graspd_dot_v1_dot_tactile__stabilizer__pb2.ListCalibrationsRequest.SerializeToString,
+            graspd_dot_v1_dot_tactile__stabilizer__pb2.ListCalibrationsResponse.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def GetCalibration(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/graspd.v1.TactileStabilizer/GetCalibration',
+            graspd_dot_v1_dot_tactile__stabilizer__pb2.GetCalibrationRequest.SerializeToString,
+            graspd_dot_v1_dot_tactile__stabilizer__pb2.CalibrationInfo.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def DeleteCalibration(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/graspd.v1.TactileStabilizer/DeleteCalibration',
+            graspd_dot_v1_dot_tactile__stabilizer__pb2.DeleteCalibrationRequest.SerializeToString,
+            graspd_dot_v1_dot_tactile__stabilizer__pb2.DeleteCalibrationResponse.FromString,
             options,
             channel_credentials,
             insecure,

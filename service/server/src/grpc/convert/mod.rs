@@ -3,14 +3,16 @@
 //! message as untrusted: every error names the offending field by its proto path.
 //!
 //! One file per message family: [`values`] (vectors, poses, enums), [`hands`], [`plan`]
-//! (PlanGrasp requests and responses), [`perception`], [`tactile`].
+//! (PlanGrasp requests and responses), [`perception`], [`tactile`], [`calibration`].
 
+mod calibration;
 mod hands;
 mod perception;
 mod plan;
 mod tactile;
 mod values;
 
+pub use calibration::*;
 pub use hands::*;
 pub use plan::*;
 pub use tactile::*;

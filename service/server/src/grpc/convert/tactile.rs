@@ -81,6 +81,7 @@ pub fn tactile_session_from_proto(
     let detector = match s.detector.and_then(|d| d.kind) {
         None => d.detector.clone(),
         Some(DetectorKind::Model(name)) => DetectorChoice::Model(name),
+        Some(DetectorKind::Calibration(name)) => DetectorChoice::Calibration(name),
         Some(DetectorKind::ModelFree(t)) => {
             let td = ModelFreeThresholds::default();
             DetectorChoice::ModelFree(ModelFreeThresholds {
@@ -119,7 +120,10 @@ pub fn tactile_session_from_proto(
     })
 }
 
-fn tare_from_proto(t: Option<pb::TareSettings>, field: &str) -> Result<TareConfig, FieldError> {
+pub(super) fn tare_from_proto(
+    t: Option<pb::TareSettings>,
+    field: &str,
+) -> Result<TareConfig, FieldError> {
     let Some(t) = t else {
         return Ok(TareConfig::default());
     };
@@ -149,6 +153,21 @@ fn tare_from_proto(t: Option<pb::TareSettings>, field: &str) -> Result<TareConfi
     })
 }
 
+/// Taring as the proto's TareSettings (the inverse of [`tare_from_proto`]).
+pub(super) fn tare_to_proto(t: &TareConfig) -> pb::TareSettings {
+    pb::TareSettings {
+        baseline_frames: match t.baseline {
+            Baseline::FirstFrames(n) => Some(n.min(u32::MAX as usize) as u32),
+            Baseline::None => None,
+        },
+        pretared: t.baseline == Baseline::None,
+        electrode_polarity: match t.electrode_polarity {
+            ElectrodePolarity::Falling => pb::ElectrodePolarity::Falling,
+            ElectrodePolarity::Rising => pb::ElectrodePolarity::Rising,
+        } as i32,
+    }
+}
+
 /// The client's side: a session request as the proto message.
 pub fn tactile_session_to_proto(r: &TactileSessionRequest) -> pb::TactileSession {
     let c = &r.config;
@@ -172,17 +191,7 @@ pub fn tactile_session_to_proto(r: &TactileSessionRequest) -> pb::TactileSession
                             .collect(),
                     }),
                 }),
-                tare: Some(pb::TareSettings {
-                    baseline_frames: match f.tare.baseline {
-                        Baseline::FirstFrames(n) => Some(n.min(u32::MAX as usize) as u32),
-                        Baseline::None => None,
-                    },
-                    pretared: f.tare.baseline == Baseline::None,
-                    electrode_polarity: match f.tare.electrode_polarity {
-                        ElectrodePolarity::Falling => pb::ElectrodePolarity::Falling,
-                        ElectrodePolarity::Rising => pb::ElectrodePolarity::Rising,
-                    } as i32,
-                }),
+                tare: Some(tare_to_proto(&f.tare)),
             })
             .collect(),
         window_length: Some(c.window_length.min(u32::MAX as usize) as u32),
@@ -207,6 +216,9 @@ pub fn tactile_session_to_proto(r: &TactileSessionRequest) -> pb::TactileSession
             DetectorChoice::Default => None,
             DetectorChoice::Model(n) => Some(pb::TactileDetector {
                 kind: Some(DetectorKind::Model(n.clone())),
+            }),
+            DetectorChoice::Calibration(n) => Some(pb::TactileDetector {
+                kind: Some(DetectorKind::Calibration(n.clone())),
             }),
             DetectorChoice::ModelFree(t) => Some(pb::TactileDetector {
                 kind: Some(DetectorKind::ModelFree(pb::ModelFreeThresholds {

@@ -4,15 +4,18 @@
 //! is, and the DTOs here cover what differs: clouds (arrays or base64), positions as
 //! `{x, y, z}` (accepted as `[x, y, z]` too), poses and the response layout.
 //!
-//! One file per message family: [`values`], [`plan`], [`perception`], [`tactile`], [`hands`];
+//! One file per message family: [`values`], [`plan`], [`perception`], [`tactile`],
+//! [`calibration`], [`hands`];
 //! here the parser that names fields by their paths, and the error body.
 
+mod calibration;
 mod hands;
 mod perception;
 mod plan;
 mod tactile;
 mod values;
 
+pub use calibration::*;
 pub use hands::*;
 pub use perception::*;
 pub use plan::*;

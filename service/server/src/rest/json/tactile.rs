@@ -44,12 +44,13 @@ pub struct TactileFingerJson {
     pub tare: Option<TareJson>,
 }
 
-/// `{"model_free": {thresholds…}}` or `{"model": "name"}`.
+/// `{"model_free": {thresholds…}}`, `{"model": "name"}` or `{"calibration": "name"}`.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum DetectorJson {
     ModelFree(ModelFreeThresholds),
     Model(String),
+    Calibration(String),
 }
 
 /// The session-opening message (the proto's TactileSession in JSON); unset fields take the
@@ -160,6 +161,9 @@ pub struct AnalyzeCsvQuery {
     pub alpha: Option<f64>,
     #[serde(default)]
     pub calibration_gain: Option<f64>,
+    /// A calibration (POST /v1/tactile/calibrations) as the detector.
+    #[serde(default)]
+    pub calibration: Option<String>,
 }
 
 impl AnalyzeCsvQuery {
@@ -193,12 +197,12 @@ impl AnalyzeCsvQuery {
             pid,
             alpha: self.alpha,
             calibration_gain: self.calibration_gain,
-            detector: None,
+            detector: self.calibration.map(DetectorJson::Calibration),
         }
     }
 }
 
-fn tare_from_json(t: Option<TareJson>) -> TareConfig {
+pub(super) fn tare_from_json(t: Option<TareJson>) -> TareConfig {
     let Some(t) = t else {
         return TareConfig::default();
     };
@@ -253,6 +257,7 @@ pub fn tactile_session_from_json(s: TactileSessionJson) -> TactileSessionRequest
                 None => d.detector,
                 Some(DetectorJson::ModelFree(t)) => DetectorChoice::ModelFree(t),
                 Some(DetectorJson::Model(n)) => DetectorChoice::Model(n),
+                Some(DetectorJson::Calibration(n)) => DetectorChoice::Calibration(n),
             },
         },
     }

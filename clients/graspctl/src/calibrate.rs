@@ -1,0 +1,262 @@
+//! `graspctl tactile …`: fit a calibration on a folder of labelled recordings, list and delete
+//! calibrations (issue 16).
+//!
+//! A folder of recordings: every `*_bio.csv` under DIR (two levels deep at most), with the arm's
+//! `*_cw.csv` and `*_cv.csv` beside it when present (frame events). A recording's material is
+//! given by its folder (relative to DIR): a `labels.csv` in DIR (or `--labels FILE`) maps
+//! folders to materials, one `folder,material` per line (`mat5,plastic/mat5`); without one the
+//! folder's own path is the material (`DIR/foam/…`, `DIR/plastic/eva/…`).
+
+use crate::{CliError, connect_tactile};
+use clap::{Args, Subcommand};
+use graspd::facade::{CalibrationUpload, RecordingUpload};
+use graspd::grpc::convert;
+use graspd_core::FieldError;
+use graspd_core::tactile::{Baseline, ElectrodePolarity, TareConfig};
+use graspd_proto::v1 as pb;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Subcommand)]
+pub enum TactileCommand {
+    /// Fit a calibration on a folder of labelled recordings and store it on the server.
+    Calibrate(CalibrateArgs),
+    /// List the server's calibrations.
+    Calibrations,
+    /// Delete a calibration.
+    Delete {
+        /// The calibration's name.
+        name: String,
+    },
+}
+
+#[derive(Debug, Args)]
+pub struct CalibrateArgs {
+    /// The folder of recordings.
+    dir: PathBuf,
+    /// The calibration's name (sessions name it as their detector).
+    #[arg(long)]
+    name: String,
+    /// folder,material lines [DIR/labels.csv when present, else the folder names].
+    #[arg(long, value_name = "FILE")]
+    labels: Option<PathBuf>,
+    /// Replace a calibration of this name.
+    #[arg(long)]
+    replace: bool,
+    /// The recordings are already tared (baseline 0, rising electrodes), like the dexrob set.
+    #[arg(long)]
+    pretared: bool,
+    /// Frames averaged for the baseline at the start of each recording [50].
+    #[arg(long, value_name = "N", conflicts_with = "pretared")]
+    baseline_frames: Option<usize>,
+    /// l of the windows [32].
+    #[arg(long)]
+    window_length: Option<usize>,
+    /// k: every k-th reading [3].
+    #[arg(long)]
+    stride: Option<usize>,
+    /// Leave the arm's files out (no frame events).
+    #[arg(long)]
+    no_events: bool,
+}
+
+/// The `*_bio.csv` files under `dir`, at most two folders deep, sorted.
+fn bio_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    let mut stack = vec![(dir.to_path_buf(), 0)];
+    while let Some((d, depth)) = stack.pop() {
+        for entry in std::fs::read_dir(&d)? {
+            let path = entry?.path();
+            if path.is_dir() && depth < 2 {
+                stack.push((path, depth + 1));
+            } else if path
+                .file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.ends_with("_bio.csv"))
+            {
+                out.push(path);
+            }
+        }
+    }
+    out.sort();
+    Ok(out)
+}
+
+fn read(path: &Path) -> Result<String, CliError> {
+    std::fs::read_to_string(path).map_err(|source| CliError::Read {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// folder → material from a labels file.
+fn labels(path: &Path) -> Result<BTreeMap<String, String>, CliError> {
+    let mut map = BTreeMap::new();
+    for (i, line) in read(path)?.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let (folder, material) = line.split_once(',').ok_or_else(|| {
+            CliError::Answer(FieldError::new(
+                format!("{}:{}", path.display(), i + 1),
+                "expected folder,material",
+            ))
+        })?;
+        map.insert(folder.trim().to_string(), material.trim().to_string());
+    }
+    Ok(map)
+}
+
+impl CalibrateArgs {
+    /// The upload: every recording of the folder with its material.
+    fn upload(&self) -> Result<CalibrationUpload, CliError> {
+        let labels_file = self
+            .labels
+            .clone()
+            .or_else(|| Some(self.dir.join("labels.csv")).filter(|p| p.is_file()));
+        let labels = labels_file.as_deref().map(labels).transpose()?;
+        let files = bio_files(&self.dir).map_err(|source| CliError::Read {
+            path: self.dir.clone(),
+            source,
+        })?;
+        let mut recordings = Vec::new();
+        for bio in files {
+            let folder = bio
+                .parent()
+                .and_then(|p| p.strip_prefix(&self.dir).ok())
+                .map(|p| p.to_string_lossy().replace('\\', "/"))
+                .unwrap_or_default();
+            let material = match &labels {
+                Some(l) => l.get(&folder).cloned(),
+                None => (!folder.is_empty()).then(|| folder.clone()),
+            };
+            let sibling = |kind: &str| {
+                let name = bio.file_name()?.to_str()?.replace("_bio.csv", kind);
+                Some(bio.with_file_name(name)).filter(|p| p.is_file())
+            };
+            let (cw, cv) = match (sibling("_cw.csv"), sibling("_cv.csv")) {
+                (Some(cw), Some(cv)) if !self.no_events => (Some(read(&cw)?), Some(read(&cv)?)),
+                _ => (None, None),
+            };
+            recordings.push(RecordingUpload {
+                material,
+                bio_csv: read(&bio)?,
+                cw_csv: cw,
+                cv_csv: cv,
+            });
+        }
+        let tare = if self.pretared {
+            TareConfig::pretared()
+        } else {
+            TareConfig {
+                baseline: match (TareConfig::default().baseline, self.baseline_frames) {
+                    (_, Some(n)) => Baseline::FirstFrames(n),
+                    (b, None) => b,
+                },
+                electrode_polarity: ElectrodePolarity::Falling,
+            }
+        };
+        Ok(CalibrationUpload {
+            name: self.name.clone(),
+            replace: self.replace,
+            window_length: self.window_length,
+            stride: self.stride,
+            tare,
+            recordings,
+        })
+    }
+}
+
+/// One calibration as text.
+fn summary(c: &pb::CalibrationInfo) -> String {
+    let labels: Vec<String> = c
+        .material_windows
+        .iter()
+        .map(|l| format!("{} {}", l.label, l.windows))
+        .collect();
+    let events = match c.event_windows.as_slice() {
+        [a, b, s] if a + b + s > 0 => {
+            format!("non-contact {a}, contact {b}, slip {s}")
+        }
+        _ => "none".into(),
+    };
+    format!(
+        "{}: {} electrodes, windows of {} every {}, {} recordings fitted in {:.0} ms{}\n  material windows: {}\n  event windows: {events}\n",
+        c.name,
+        c.electrodes,
+        c.window_length,
+        c.stride,
+        c.recordings,
+        c.fit_ms,
+        if c.persisted { "" } else { " (in memory only)" },
+        if labels.is_empty() {
+            "none".to_string()
+        } else {
+            labels.join(", ")
+        },
+    )
+}
+
+pub async fn run(
+    server: &str,
+    token: Option<&str>,
+    command: &TactileCommand,
+    json: bool,
+) -> Result<(), CliError> {
+    let mut client = connect_tactile(server, token).await?;
+    let infos = match command {
+        TactileCommand::Calibrate(args) => {
+            let upload = args.upload()?;
+            if upload.recordings.is_empty() {
+                return Err(CliError::Answer(FieldError::new(
+                    "DIR",
+                    format!("no *_bio.csv recordings under {}", args.dir.display()),
+                )));
+            }
+            vec![
+                client
+                    .calibrate(convert::calibrate_request_to_proto(&upload))
+                    .await?
+                    .into_inner(),
+            ]
+        }
+        TactileCommand::Calibrations => {
+            client
+                .list_calibrations(pb::ListCalibrationsRequest {})
+                .await?
+                .into_inner()
+                .calibrations
+        }
+        TactileCommand::Delete { name } => {
+            client
+                .delete_calibration(pb::DeleteCalibrationRequest { name: name.clone() })
+                .await?;
+            if !json {
+                println!("deleted {name}");
+            }
+            return Ok(());
+        }
+    };
+    for info in &infos {
+        if json {
+            println!(
+                "{}",
+                serde_json::json!({
+                    "name": info.name,
+                    "electrodes": info.electrodes,
+                    "window_length": info.window_length,
+                    "stride": info.stride,
+                    "recordings": info.recordings,
+                    "material_windows": info.material_windows.iter().map(|l| serde_json::json!({"label": l.label, "windows": l.windows})).collect::<Vec<_>>(),
+                    "event_windows": info.event_windows,
+                    "fit_ms": info.fit_ms,
+                    "persisted": info.persisted,
+                })
+            );
+        } else {
+            print!("{}", summary(info));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,274 @@
+//! Tactile calibrations (issue 16): fitted from a user's labelled recordings, kept by name
+//! like registered hands (in memory, and in the calibrations directory when one is
+//! configured), listed, deleted, and named by sessions (`detector.calibration`).
+
+use super::{GraspService, ServiceError, guarded};
+use crate::calibration_store;
+use crate::hand_store::check_name;
+use graspd_core::FieldError;
+use graspd_core::tactile::{
+    Calibration, CalibrationRecording, CalibrationSettings, Recording, StabilizerConfig, TareConfig,
+};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// One labelled recording as the transports receive it: the `_bio.csv` text and, for frame
+/// events, the arm's `_cw.csv` and `_cv.csv` (`tactile::recording` derives them).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RecordingUpload {
+    /// The material touched (`paper`, `foam`, `plastic`, `metal`, optionally `/kind`).
+    pub material: Option<String>,
+    pub bio_csv: String,
+    pub cw_csv: Option<String>,
+    pub cv_csv: Option<String>,
+}
+
+/// A calibration request in domain terms.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationUpload {
+    pub name: String,
+    /// Replace a calibration of this name.
+    pub replace: bool,
+    pub window_length: Option<usize>,
+    pub stride: Option<usize>,
+    pub tare: TareConfig,
+    pub recordings: Vec<RecordingUpload>,
+}
+
+/// A stored calibration and whether it is on disk.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationInfo {
+    pub calibration: Arc<Calibration>,
+    pub persisted: bool,
+}
+
+/// The calibrations by name, and where they persist.
+#[derive(Debug, Default)]
+pub(super) struct Calibrations {
+    by_name: BTreeMap<String, Arc<Calibration>>,
+    dir: Option<PathBuf>,
+}
+
+impl GraspService {
+    /// Loads the calibrations of `dir` and stores new ones there (at start, before the
+    /// service is shared).
+    pub fn with_calibrations_dir(self, dir: PathBuf) -> Result<Self, String> {
+        let loaded = calibration_store::load_dir(&dir)?;
+        {
+            let mut c = self.calibrations_mut();
+            for cal in loaded {
+                c.by_name.insert(cal.name.clone(), Arc::new(cal));
+            }
+            c.dir = Some(dir);
+        }
+        Ok(self)
+    }
+
+    /// Fits a calibration on the uploaded recordings and stores it (errors name the field:
+    /// `name`, `recordings[3].bio_csv`, `recordings[].material`, …; nothing is stored on
+    /// error). CPU-bound and blocking.
+    pub fn calibrate(&self, upload: CalibrationUpload) -> Result<CalibrationInfo, ServiceError> {
+        check_name(&upload.name, "name")?;
+        let bytes: usize = upload
+            .recordings
+            .iter()
+            .map(|r| {
+                r.bio_csv.len()
+                    + r.cw_csv.as_ref().map_or(0, String::len)
+                    + r.cv_csv.as_ref().map_or(0, String::len)
+            })
+            .sum();
+        let limit = self.inner.limits.max_message_bytes;
+        if bytes > limit {
+            return Err(ServiceError::TooLarge(FieldError::new(
+                "recordings",
+                format!(
+                    "the recordings take {bytes} bytes, over the configured limit of {limit} bytes (max_message_bytes)"
+                ),
+            )));
+        }
+        let taken = |c: &Calibrations| -> Result<(), ServiceError> {
+            if !upload.replace && c.by_name.contains_key(&upload.name) {
+                return Err(ServiceError::AlreadyExists(FieldError::new(
+                    "name",
+                    format!(
+                        "calibration '{}' exists (set replace to replace it)",
+                        upload.name
+                    ),
+                )));
+            }
+            Ok(())
+        };
+        taken(&self.calibrations())?;
+        let recordings = upload
+            .recordings
+            .iter()
+            .enumerate()
+            .map(|(i, r)| parse_recording(r, &format!("recordings[{i}]")))
+            .collect::<Result<Vec<_>, FieldError>>()?;
+        let d = CalibrationSettings::default();
+        let settings = CalibrationSettings {
+            window_length: upload.window_length.unwrap_or(d.window_length),
+            stride: upload.stride.unwrap_or(d.stride),
+            tare: upload.tare,
+        };
+        let calibration = guarded("fitting the calibration", || {
+            Calibration::fit(&upload.name, &recordings, settings).map_err(ServiceError::from)
+        })?;
+        let calibration = Arc::new(calibration);
+        let mut c = self.calibrations_mut();
+        taken(&c)?;
+        if let Some(dir) = &c.dir {
+            calibration_store::save(dir, &calibration).map_err(|e| {
+                ServiceError::Internal(format!("cannot store the calibration: {e}"))
+            })?;
+        }
+        c.by_name.insert(upload.name, calibration.clone());
+        Ok(CalibrationInfo {
+            calibration,
+            persisted: c.dir.is_some(),
+        })
+    }
+
+    /// Every calibration, by name.
+    pub fn list_calibrations(&self) -> Vec<CalibrationInfo> {
+        let c = self.calibrations();
+        c.by_name
+            .values()
+            .map(|cal| CalibrationInfo {
+                calibration: cal.clone(),
+                persisted: c.dir.is_some(),
+            })
+            .collect()
+    }
+
+    /// One calibration (`NotFound` naming `name`).
+    pub fn get_calibration(&self, name: &str) -> Result<CalibrationInfo, ServiceError> {
+        let c = self.calibrations();
+        match c.by_name.get(name) {
+            Some(cal) => Ok(CalibrationInfo {
+                calibration: cal.clone(),
+                persisted: c.dir.is_some(),
+            }),
+            None => Err(ServiceError::NotFound(unknown(&c, name, "name"))),
+        }
+    }
+
+    /// Deletes a calibration (from disk too). Sessions already using it keep it.
+    pub fn delete_calibration(&self, name: &str) -> Result<(), ServiceError> {
+        let mut c = self.calibrations_mut();
+        if !c.by_name.contains_key(name) {
+            return Err(ServiceError::NotFound(unknown(&c, name, "name")));
+        }
+        if let Some(dir) = &c.dir {
+            calibration_store::remove(dir, name).map_err(|e| {
+                ServiceError::Internal(format!("cannot delete the stored calibration: {e}"))
+            })?;
+        }
+        c.by_name.remove(name);
+        Ok(())
+    }
+
+    /// The calibration a session names, checked against the session: its window, stride,
+    /// and every finger's electrode count and taring (errors name the field).
+    pub(super) fn session_calibration(
+        &self,
+        name: &str,
+        config: &StabilizerConfig,
+    ) -> Result<Arc<Calibration>, ServiceError> {
+        let field = "session.detector.calibration";
+        let cal = {
+            let c = self.calibrations();
+            c.by_name
+                .get(name)
+                .cloned()
+                .ok_or_else(|| unknown(&c, name, field))?
+        };
+        let s = &cal.settings;
+        if (config.window_length, config.stride) != (s.window_length, s.stride) {
+            return Err(FieldError::new(
+                "session.window_length",
+                format!(
+                    "calibration '{name}' was fitted on windows of {} with stride {}; the session has {} and {}",
+                    s.window_length, s.stride, config.window_length, config.stride
+                ),
+            )
+            .into());
+        }
+        for (i, f) in config.fingers.iter().enumerate() {
+            if f.layout.electrode_count() != cal.electrodes {
+                return Err(FieldError::new(
+                    format!("session.fingers[{i}].layout"),
+                    format!(
+                        "layout {} has {} electrodes; calibration '{name}' reads {}",
+                        f.layout.name,
+                        f.layout.electrode_count(),
+                        cal.electrodes
+                    ),
+                )
+                .into());
+            }
+            if f.tare != s.tare {
+                return Err(FieldError::new(
+                    format!("session.fingers[{i}].tare"),
+                    format!(
+                        "calibration '{name}' was fitted on readings tared as {:?}; the finger is tared as {:?}",
+                        s.tare, f.tare
+                    ),
+                )
+                .into());
+            }
+        }
+        Ok(cal)
+    }
+
+    fn calibrations(&self) -> std::sync::RwLockReadGuard<'_, Calibrations> {
+        self.inner
+            .calibrations
+            .read()
+            .unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn calibrations_mut(&self) -> std::sync::RwLockWriteGuard<'_, Calibrations> {
+        self.inner
+            .calibrations
+            .write()
+            .unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// An unknown calibration, naming the known ones.
+fn unknown(c: &Calibrations, name: &str, field: &str) -> FieldError {
+    let known: Vec<&str> = c.by_name.keys().map(String::as_str).collect();
+    let known = if known.is_empty() {
+        "none yet: POST /v1/tactile/calibrations".to_string()
+    } else {
+        known.join(", ")
+    };
+    FieldError::new(
+        field,
+        format!(
+            "unknown calibration '{}' (known: {known})",
+            name.escape_debug()
+        ),
+    )
+}
+
+/// One upload as core's recording: the CSVs parsed (errors renamed under `field`), events
+/// when both arm files are given.
+fn parse_recording(r: &RecordingUpload, field: &str) -> Result<CalibrationRecording, FieldError> {
+    if r.cw_csv.is_some() != r.cv_csv.is_some() {
+        return Err(FieldError::new(
+            format!("{field}.cw_csv"),
+            "frame events need both the wrench (cw_csv) and the velocity (cv_csv) files",
+        ));
+    }
+    let rec = Recording::from_csv(&r.bio_csv, r.cw_csv.as_deref(), r.cv_csv.as_deref())
+        .map_err(|e| FieldError::new(format!("{field}.{}", e.field), e.message))?;
+    Ok(CalibrationRecording {
+        material: r.material.clone(),
+        readings: rec.rows.iter().map(|row| row.reading()).collect(),
+        events: rec.labels,
+    })
+}

@@ -1,0 +1,316 @@
+//! Tactile calibrations end to end (issue 16): Calibrate over gRPC on real BioTac recordings
+//! (../shared/testdata/tactile/biotac_slide, measurement only) with a calibrations directory;
+//! after a restart on that directory the calibration is listed over REST and a session naming
+//! it reports the material of a recording it was not fitted on; bad calibration inputs are
+//! refused naming the field and store nothing; a session that does not fit the calibration is
+//! refused naming the field; DELETE removes it from disk.
+
+use graspd::facade::{CalibrationUpload, RecordingUpload};
+use graspd::grpc::convert;
+use graspd_core::tactile::TareConfig;
+use graspd_e2e::{Server, http, rest_error};
+use graspd_proto::v1 as pb;
+use graspd_proto::v1::tactile_stabilizer_client::TactileStabilizerClient;
+use serde_json::json;
+use std::path::PathBuf;
+use tonic::Code;
+
+fn read(mat: &str, sample: usize, kind: &str) -> String {
+    let path = graspd_testkit::testdata_dir()
+        .join("tactile/biotac_slide")
+        .join(mat)
+        .join(format!("{mat}_{sample}_{kind}.csv"));
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
+}
+
+/// Samples 1–3 of a foam (mat17) and of the metal (mat20), labelled, with the arm's files.
+fn upload(name: &str) -> CalibrationUpload {
+    let mut recordings = Vec::new();
+    for (mat, material) in [("mat17", "foam/styrofoam"), ("mat20", "metal")] {
+        for sample in 1..=3 {
+            recordings.push(RecordingUpload {
+                material: Some(material.into()),
+                bio_csv: read(mat, sample, "bio"),
+                cw_csv: Some(read(mat, sample, "cw")),
+                cv_csv: Some(read(mat, sample, "cv")),
+            });
+        }
+    }
+    CalibrationUpload {
+        name: name.into(),
+        replace: false,
+        window_length: None,
+        stride: None,
+        tare: TareConfig::pretared(),
+        recordings,
+    }
+}
+
+fn calibrations_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("graspd-calibrations-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn listing(dir: &std::path::Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .map(|r| {
+            r.filter_map(|e| e.ok()?.file_name().into_string().ok())
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+/// The materials a REST analyze of `bio` with the calibration reports, over frames in contact.
+async fn analyze_materials(server: &Server, calibration: &str, bio: &str) -> Vec<String> {
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze"))
+        .multipart(
+            reqwest::multipart::Form::new()
+                .part(
+                    "bio_csv",
+                    reqwest::multipart::Part::text(bio.to_string()).file_name("held_out_bio.csv"),
+                )
+                .text(
+                    "session",
+                    json!({
+                        "fingers": [{"name": "ff", "layout": "biotac", "tare": {"pretared": true}}],
+                        "detector": {"calibration": calibration},
+                    })
+                    .to_string(),
+                ),
+        )
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    let body: serde_json::Value = response.json().await.unwrap();
+    body["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["fingers"][0]["material"].as_str().unwrap().to_string())
+        .filter(|m| m != "unknown")
+        .collect()
+}
+
+#[tokio::test]
+async fn a_calibration_is_fitted_stored_reloaded_and_names_the_material() {
+    let dir = calibrations_dir("round-trip");
+    let flags = ["--calibrations-dir", dir.to_str().unwrap()];
+    {
+        let server = Server::start_with(&flags);
+        let mut grpc = TactileStabilizerClient::connect(server.grpc_url())
+            .await
+            .unwrap();
+        let info = grpc
+            .calibrate(convert::calibrate_request_to_proto(&upload("slide")))
+            .await
+            .unwrap()
+            .into_inner();
+        assert!(info.persisted);
+        assert_eq!(
+            (info.electrodes, info.window_length, info.stride),
+            (19, 32, 3)
+        );
+        assert_eq!(info.recordings, 6);
+        let labels: Vec<&str> = info
+            .material_windows
+            .iter()
+            .map(|l| l.label.as_str())
+            .collect();
+        assert_eq!(labels, ["foam/styrofoam", "metal"]);
+        assert!(
+            info.material_windows.iter().all(|l| l.windows > 500),
+            "{info:?}"
+        );
+        assert_eq!(info.event_windows.len(), 3);
+        assert_eq!(listing(&dir), ["slide.json"]);
+        let e = grpc
+            .calibrate(convert::calibrate_request_to_proto(&upload("slide")))
+            .await
+            .unwrap_err();
+        assert_eq!(e.code(), Code::AlreadyExists, "{}", e.message());
+    }
+    let server = Server::start_with(&flags);
+    let listed: serde_json::Value = http()
+        .get(server.rest_url("/v1/tactile/calibrations"))
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    assert_eq!(listed["calibrations"][0]["name"], "slide", "{listed}");
+    assert_eq!(
+        listed["calibrations"][0]["material_windows"][1]["label"],
+        "metal"
+    );
+    // Held-out samples of each material: the calibration's answer in contact.
+    for (mat, want) in [("mat20", "metal"), ("mat17", "foam")] {
+        let materials = analyze_materials(&server, "slide", &read(mat, 15, "bio")).await;
+        let right = materials.iter().filter(|m| *m == want).count();
+        assert!(
+            materials.len() > 400,
+            "{mat}: {} frames with a material",
+            materials.len()
+        );
+        assert!(
+            right as f64 >= 0.9 * materials.len() as f64,
+            "{mat}: {right} of {} frames {want}",
+            materials.len()
+        );
+    }
+    let response = http()
+        .delete(server.rest_url("/v1/tactile/calibrations/slide"))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 204);
+    assert!(listing(&dir).is_empty(), "{:?}", listing(&dir));
+    let (status, _, field, message) = rest_error(
+        http()
+            .get(server.rest_url("/v1/tactile/calibrations/slide"))
+            .send()
+            .await
+            .unwrap(),
+    )
+    .await;
+    assert_eq!((status, field.as_deref()), (404, Some("name")), "{message}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[tokio::test]
+async fn bad_calibrations_and_sessions_that_do_not_fit_are_refused_naming_the_field() {
+    let dir = calibrations_dir("bad");
+    let server = Server::start_with(&["--calibrations-dir", dir.to_str().unwrap()]);
+    let post = |body: serde_json::Value| {
+        http()
+            .post(server.rest_url("/v1/tactile/calibrations"))
+            .json(&body)
+            .send()
+    };
+    let bio = read("mat20", 1, "bio");
+    let rec = |material: &str| json!({"material": material, "bio_csv": bio});
+    for (body, want_field, want_text) in [
+        (
+            json!({"name": "x", "recordings": [rec("wood"), rec("metal")]}),
+            "recordings[0].material",
+            "unknown material 'wood'",
+        ),
+        (
+            json!({"name": "x", "recordings": [rec("metal/a"), rec("metal/b")]}),
+            "recordings[].material",
+            "one class only (metal)",
+        ),
+        (
+            json!({"name": "x", "recordings": [rec("foam"), {"material": "metal", "bio_csv": "timestamp,tdc,tac,pdc,pac1,ele1\n1,2,3,4,5,6,\n"}]}),
+            "recordings[1].readings[0].electrodes",
+            "1 electrodes",
+        ),
+        (
+            json!({"name": "x", "recordings": [rec("foam"), {"material": "metal", "bio_csv": bio, "cw_csv": "timestamp,fx,fy,fz,tx,ty,tz\n"}]}),
+            "recordings[1].cw_csv",
+            "both",
+        ),
+        (
+            json!({"name": "../x", "recordings": [rec("foam"), rec("metal")]}),
+            "name",
+            "not a valid",
+        ),
+        (
+            json!({"name": "x", "recordings": []}),
+            "recordings",
+            "no recordings",
+        ),
+    ] {
+        let (status, code, field, message) = rest_error(post(body).await.unwrap()).await;
+        assert_eq!(
+            (status, code.as_str(), field.as_deref()),
+            (400, "invalid_argument", Some(want_field)),
+            "{message}"
+        );
+        assert!(message.contains(want_text), "{want_field}: {message}");
+    }
+    assert!(listing(&dir).is_empty(), "{:?}", listing(&dir));
+    // A valid one, then sessions that do not fit it.
+    let response = post(json!({"name": "slide", "tare": {"pretared": true}, "recordings": [rec("foam"), rec("metal")]}))
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 201);
+    let mut grpc = TactileStabilizerClient::connect(server.grpc_url())
+        .await
+        .unwrap();
+    for (session, want_field) in [
+        (
+            json!({"detector": {"calibration": "nope"}}),
+            "session.detector.calibration",
+        ),
+        (
+            json!({"detector": {"calibration": "slide"}, "stride": 2}),
+            "session.window_length",
+        ),
+        (
+            json!({"detector": {"calibration": "slide"}, "fingers": [{"name": "ff", "layout": "biotac"}]}),
+            "session.fingers[0].tare",
+        ),
+        (
+            json!({"detector": {"calibration": "slide"}, "fingers": [{"name": "ff", "layout": "biotac_sp", "tare": {"pretared": true}}]}),
+            "session.fingers[0].layout",
+        ),
+    ] {
+        let mut s =
+            json!({"fingers": [{"name": "ff", "layout": "biotac", "tare": {"pretared": true}}]});
+        for (k, v) in session.as_object().unwrap() {
+            s[k] = v.clone();
+        }
+        let response = http()
+            .post(server.rest_url("/v1/tactile/analyze"))
+            .json(&json!({"session": s, "frames": []}))
+            .send()
+            .await
+            .unwrap();
+        let (status, _, field, message) = rest_error(response).await;
+        assert_eq!(
+            (status, field.as_deref()),
+            (400, Some(want_field)),
+            "{message}"
+        );
+    }
+    // The same rule over gRPC: a stream naming an unknown calibration.
+    let (tx, rx) = tokio::sync::mpsc::channel(1);
+    tx.send(pb::StabilizeRequest {
+        kind: Some(pb::stabilize_request::Kind::Session(pb::TactileSession {
+            fingers: vec![pb::TactileFinger {
+                name: "ff".into(),
+                layout: Some(pb::tactile_finger::Layout::LayoutName("biotac".into())),
+                tare: Some(pb::TareSettings {
+                    pretared: true,
+                    ..Default::default()
+                }),
+            }],
+            detector: Some(pb::TactileDetector {
+                kind: Some(pb::tactile_detector::Kind::Calibration("nope".into())),
+            }),
+            ..Default::default()
+        })),
+    })
+    .await
+    .unwrap();
+    let e = grpc
+        .stabilize(tonic::codegen::tokio_stream::wrappers::ReceiverStream::new(
+            rx,
+        ))
+        .await
+        .unwrap_err();
+    assert_eq!(e.code(), Code::InvalidArgument);
+    assert!(
+        e.message()
+            .starts_with("session.detector.calibration: unknown calibration 'nope' (known: slide)"),
+        "{}",
+        e.message()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
