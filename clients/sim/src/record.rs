@@ -69,6 +69,9 @@ pub struct TrialRecord {
     pub approach: Option<[f64; 3]>,
     pub robustness: Option<f64>,
     pub planned_contacts: Vec<String>,
+    /// Which of them lie on the completed, unseen side of the object (`inferred`).
+    #[serde(default)]
+    pub planned_inferred: Vec<bool>,
     /// The executed plan's contact positions (world), its resisted weight and S (Eq 5.3).
     pub planned_positions: Vec<[f64; 3]>,
     pub gravity_resistance: Option<f64>,
@@ -119,6 +122,7 @@ impl TrialRecord {
             approach: None,
             robustness: None,
             planned_contacts: Vec::new(),
+            planned_inferred: Vec::new(),
             planned_positions: Vec::new(),
             gravity_resistance: None,
             gii: None,

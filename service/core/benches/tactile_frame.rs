@@ -7,7 +7,8 @@
 //! ONNX Runtime from `$ORT_DYLIB_PATH` or .tools/onnxruntime; skipped when neither exists). The
 //! model runs on every k-th frame (k = 3), so its cost per frame is about a third of a run. The
 //! real recordings run a third time with a calibration (`tactile::calibration`) fitted at start
-//! on samples 2–3 of each material: its features and discriminant also run on every k-th frame.
+//! on samples 2–5 of each of the ten materials (40 recordings; the fit's time is printed): its
+//! features and discriminant also run on every k-th frame.
 //! `cargo bench -p graspd-core --bench tactile_frame`.
 
 use graspd_core::onnx_runtime::init_onnx_runtime;
@@ -178,23 +179,29 @@ fn main() {
     }
 }
 
-/// A calibration on samples 2–3 of each material (the bench's recordings are samples 1).
+/// A calibration on samples 2–5 of each material (the bench's recordings are samples 1).
 fn fit_calibration() -> Option<Arc<Calibration>> {
     let dir = graspd_testkit::testdata_dir().join("tactile/biotac_slide");
     let classes = [
         ("mat5", "plastic"),
         ("mat8", "paper"),
+        ("mat9", "plastic"),
+        ("mat10", "plastic"),
+        ("mat13", "plastic"),
+        ("mat14", "paper"),
         ("mat17", "foam"),
+        ("mat18", "foam"),
+        ("mat19", "foam"),
         ("mat20", "metal"),
     ];
     let mut recordings = Vec::new();
     for (mat, class) in classes {
-        for sample in 2..=3 {
+        for sample in 2..=5 {
             let path = dir.join(mat).join(format!("{mat}_{sample}_bio.csv"));
             let text = std::fs::read_to_string(path).ok()?;
             let rec = Recording::from_csv(&text, None, None).expect("recording parses");
             recordings.push(CalibrationRecording {
-                material: Some(class.into()),
+                material: Some(format!("{class}/{mat}")),
                 readings: rec.rows.iter().map(|r| r.reading()).collect(),
                 events: None,
             });
@@ -204,9 +211,18 @@ fn fit_calibration() -> Option<Arc<Calibration>> {
         tare: TareConfig::pretared(),
         ..CalibrationSettings::default()
     };
-    Some(Arc::new(
-        Calibration::fit("bench", &recordings, settings).expect("the calibration fits"),
-    ))
+    let c = Calibration::fit("bench", &recordings, settings).expect("the calibration fits");
+    println!(
+        "calibration: {} recordings ({} windows) fitted in {:.0} ms on one core",
+        c.summary.recordings,
+        c.summary
+            .material_windows
+            .iter()
+            .map(|(_, n)| n)
+            .sum::<usize>(),
+        c.summary.fit_ms
+    );
+    Some(Arc::new(c))
 }
 
 fn load_model() -> Option<Arc<TactileModel>> {

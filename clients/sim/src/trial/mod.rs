@@ -249,6 +249,7 @@ pub fn pre_grasp_and_approach(
     rec.approach = r.approach.map(|a| [a.x, a.y, a.z]);
     rec.robustness = r.quality.map(|q| q.robustness);
     rec.planned_contacts = r.contacts.iter().map(|c| c.finger.clone()).collect();
+    rec.planned_inferred = r.contacts.iter().map(|c| c.inferred).collect();
     rec.planned_positions = r
         .contacts
         .iter()
