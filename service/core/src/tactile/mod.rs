@@ -3,7 +3,7 @@
 //! The pipeline per finger and frame: taring (`taring`) → window sampling and contact-event
 //! detection (`detector`) → tactile image (`tactile_image`) → GMM force estimation
 //! (`force_estimation`, Eq 6.5–6.7) → desired force (`desired_force`, Eq 6.8–6.9) → PID
-//! (`pid`). `stabilizer::Stabilizer` runs it as a session; `recording` reads the CSV layout of the
+//! (`pid`). `stabilizer::Stabilizer` runs it as a session on the `readings`; `recording` reads the CSV layout of the
 //! real BioTac recordings. Plain Rust: no transport types.
 
 pub mod calibration;
@@ -13,6 +13,7 @@ pub mod force_estimation;
 pub mod layout;
 pub mod lstm_detector;
 pub mod pid;
+pub mod readings;
 pub mod recording;
 pub mod stabilizer;
 pub mod tactile_image;

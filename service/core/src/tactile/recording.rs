@@ -19,7 +19,7 @@
 //! * otherwise non-contact.
 
 use super::detector::ContactEvent;
-use super::stabilizer::{FingerReading, Frame};
+use super::readings::{FingerReading, Frame};
 use crate::error::FieldError;
 
 /// One `_bio.csv` row.

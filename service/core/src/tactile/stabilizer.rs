@@ -17,15 +17,16 @@
 use super::desired_force::{ControlMode, DesiredForceLaw};
 use super::detector::{
     ContactEvent, Detection, DetectorSample, EventDetector, Material, ModelFreeDetector,
-    ModelFreeThresholds, WindowSampler, pac_vibration,
+    ModelFreeThresholds, WindowSampler,
 };
 use super::force_estimation::{EmOptions, ForceEstimator};
 use super::layout::SensorLayout;
 use super::pid::{Pid, PidGains};
+pub use super::readings::{FingerReading, Frame, SampleSource};
 use super::tactile_image::TactileImage;
-use super::taring::{Tare, TareConfig, TaredReading};
+use super::taring::TareConfig;
 use crate::error::FieldError;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 /// Most fingers a session may have.
 pub const MAX_FINGERS: usize = 16;
@@ -172,27 +173,6 @@ impl StabilizerConfig {
     }
 }
 
-/// One finger's reading in a frame (raw sensor units). JSON: `{"pdc": …, "pac": [...], "tdc": …,
-/// "tac": …, "electrodes": [...]}`.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct FingerReading {
-    pub pdc: f64,
-    /// One value, or the 22 samples a BioTac driver delivers per frame.
-    pub pac: Vec<f64>,
-    pub tdc: f64,
-    pub tac: f64,
-    pub electrodes: Vec<f64>,
-}
-
-/// One frame: a timestamp (s) and one reading per session finger, in session order.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Frame {
-    pub timestamp: f64,
-    pub fingers: Vec<FingerReading>,
-}
-
 /// Unit of the reported forces.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -201,47 +181,6 @@ pub enum ForceUnit {
     Raw,
     /// Newtons (a calibration gain is configured).
     Newton,
-}
-
-/// A finger's readings turned into the detector's samples exactly as a session does it (one
-/// home for a session and for fitting a calibration on recordings): tared, with the pac
-/// vibration of the module doc, and none while the baseline is still being collected.
-#[derive(Debug, Clone)]
-pub struct SampleSource {
-    tare: Tare,
-    prev_single_pac: Option<f64>,
-}
-
-impl SampleSource {
-    pub fn new(tare: TareConfig, electrodes: usize) -> Self {
-        Self {
-            tare: Tare::new(tare, electrodes),
-            prev_single_pac: None,
-        }
-    }
-
-    /// Whether the baseline is complete.
-    pub fn is_ready(&self) -> bool {
-        self.tare.is_ready()
-    }
-
-    /// The reading tared, and its detector sample when the baseline was complete before it.
-    pub fn next(&mut self, r: &FingerReading) -> (TaredReading, Option<DetectorSample>) {
-        let was_ready = self.tare.is_ready();
-        let tared = self.tare.apply(r.pdc, r.tdc, r.tac, &r.electrodes);
-        let vibration = pac_vibration(&r.pac, self.prev_single_pac);
-        self.prev_single_pac = (r.pac.len() == 1).then(|| r.pac[0]);
-        let sample = was_ready.then(|| DetectorSample {
-            pdc: tared.pdc,
-            pac: r.pac.iter().sum::<f64>() / r.pac.len() as f64,
-            pac_vibration: vibration,
-            pac_samples: r.pac.clone(),
-            tdc: tared.tdc,
-            tac: tared.tac,
-            electrodes: tared.electrodes.clone(),
-        });
-        (tared, sample)
-    }
 }
 
 /// Per-finger result of one frame.

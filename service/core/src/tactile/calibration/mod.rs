@@ -1,6 +1,6 @@
 //! Calibrations (issue 16): a detector fitted in the server on a user's own labelled
 //! recordings, in seconds and without retraining a network. The recordings run through the
-//! session's own pipeline (taring and the window t_seq, `stabilizer::SampleSource`,
+//! session's own pipeline (taring and the window t_seq, `readings::SampleSource`,
 //! `detector::WindowSampler`), each full window becomes the hand features of [`features`], and a
 //! [`classifier::LinearDiscriminant`] is fitted for the material (labels per recording: one of
 //! paper, foam, plastic, metal — the classes of Eq 6.4 the desired-force law knows — optionally
@@ -14,7 +14,7 @@ use super::detector::{
     ContactEvent, Detection, DetectorSample, EventDetector, Material, ModelFreeDetector,
     ModelFreeThresholds, WindowSampler,
 };
-use super::stabilizer::{FingerReading, SampleSource};
+use super::readings::{FingerReading, SampleSource};
 use super::taring::TareConfig;
 use crate::error::FieldError;
 use classifier::{LinearDiscriminant, class_of};
