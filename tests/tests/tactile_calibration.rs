@@ -225,6 +225,11 @@ async fn bad_calibrations_and_sessions_that_do_not_fit_are_refused_naming_the_fi
             "recordings",
             "no recordings",
         ),
+        (
+            json!({"name": "x", "window_length": 1_000_000_000u64, "recordings": [rec("foam"), rec("metal")]}),
+            "window_length",
+            "must be 1 to 1024",
+        ),
     ] {
         let (status, code, field, message) = rest_error(post(body).await.unwrap()).await;
         assert_eq!(

@@ -30,6 +30,7 @@
 //!   its output would be a guess, so the model-free detector does not pretend to know; a loaded
 //!   model supplies materials through [`EventDetector`].
 
+use crate::error::FieldError;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 
@@ -112,6 +113,24 @@ pub struct Detection {
 pub trait EventDetector: Send {
     /// `window` is oldest first; it is never empty.
     fn detect(&mut self, window: &[DetectorSample]) -> Detection;
+}
+
+/// The window t_seq's bounds, for a session and for a calibration alike: l of 1 to 1024
+/// readings, a stride k of 1 to 100 (`prefix` names where they stand, e.g. `session.`).
+pub fn check_window(window_length: usize, stride: usize, prefix: &str) -> Result<(), FieldError> {
+    if !(1..=1024).contains(&window_length) {
+        return Err(FieldError::new(
+            format!("{prefix}window_length"),
+            format!("must be 1 to 1024, got {window_length}"),
+        ));
+    }
+    if !(1..=100).contains(&stride) {
+        return Err(FieldError::new(
+            format!("{prefix}stride"),
+            format!("must be 1 to 100, got {stride}"),
+        ));
+    }
+    Ok(())
 }
 
 /// t_seq: every k-th reading, the last l of them (Table 6.1: l = 32, k = 3).

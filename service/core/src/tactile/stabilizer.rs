@@ -17,7 +17,7 @@
 use super::desired_force::{ControlMode, DesiredForceLaw};
 use super::detector::{
     ContactEvent, Detection, DetectorSample, EventDetector, Material, ModelFreeDetector,
-    ModelFreeThresholds, WindowSampler,
+    ModelFreeThresholds, WindowSampler, check_window,
 };
 use super::force_estimation::{EmOptions, ForceEstimator};
 use super::layout::SensorLayout;
@@ -138,18 +138,7 @@ impl StabilizerConfig {
                 ));
             }
         }
-        if !(1..=1024).contains(&self.window_length) {
-            return Err(FieldError::new(
-                "session.window_length",
-                format!("must be 1 to 1024, got {}", self.window_length),
-            ));
-        }
-        if !(1..=100).contains(&self.stride) {
-            return Err(FieldError::new(
-                "session.stride",
-                format!("must be 1 to 100, got {}", self.stride),
-            ));
-        }
+        check_window(self.window_length, self.stride, "session.")?;
         self.law.validate("session")?;
         self.pid.validate("session.pid")?;
         if !(self.alpha > 0.0 && self.alpha <= 1.0) {

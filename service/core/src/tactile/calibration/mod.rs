@@ -12,8 +12,9 @@ pub mod features;
 
 use super::detector::{
     ContactEvent, Detection, DetectorSample, EventDetector, Material, ModelFreeDetector,
-    ModelFreeThresholds, WindowSampler,
+    ModelFreeThresholds, WindowSampler, check_window,
 };
+use super::layout::MAX_ELECTRODES;
 use super::readings::{FingerReading, SampleSource};
 use super::taring::TareConfig;
 use crate::error::FieldError;
@@ -93,12 +94,7 @@ impl Calibration {
         settings: CalibrationSettings,
     ) -> Result<Self, FieldError> {
         let start = std::time::Instant::now();
-        if settings.window_length < 2 || settings.stride < 1 {
-            return Err(FieldError::new(
-                "window_length",
-                "a calibration needs windows of two or more samples and a stride of at least 1",
-            ));
-        }
+        check_window(settings.window_length, settings.stride, "")?;
         let Some(electrodes) = recordings
             .iter()
             .find_map(|r| r.readings.first())
@@ -106,6 +102,18 @@ impl Calibration {
         else {
             return Err(FieldError::new("recordings", "no recordings with readings"));
         };
+        // A session's layout has 2 to MAX_ELECTRODES electrodes; a calibration for more could
+        // never be used, and its covariance grows with their square.
+        if !(2..=MAX_ELECTRODES).contains(&electrodes) {
+            let i = recordings
+                .iter()
+                .position(|r| !r.readings.is_empty())
+                .unwrap_or(0);
+            return Err(FieldError::new(
+                format!("recordings[{i}].readings[0].electrodes"),
+                format!("{electrodes} electrodes; a sensor layout has 2 to {MAX_ELECTRODES}"),
+            ));
+        }
         for (i, rec) in recordings.iter().enumerate() {
             validate_recording(rec, electrodes, &format!("recordings[{i}]"))?;
         }
@@ -460,6 +468,28 @@ mod tests {
             ..recording("foam", 5.0, 1)
         };
         assert_eq!(err(&[unlabelled]).field, "recordings");
+        // The session's window bounds: a huge window is refused, not allocated.
+        let huge = CalibrationSettings {
+            window_length: 1_000_000_000,
+            ..settings()
+        };
+        let e = Calibration::fit("x", &[recording("foam", 5.0, 1)], huge).unwrap_err();
+        assert_eq!(e.field, "window_length");
+        let e = Calibration::fit(
+            "x",
+            &[recording("foam", 5.0, 1)],
+            CalibrationSettings {
+                stride: 0,
+                ..settings()
+            },
+        )
+        .unwrap_err();
+        assert_eq!(e.field, "stride");
+        let mut wide = recording("foam", 5.0, 1);
+        wide.readings[0].electrodes = vec![1.0; 100_000];
+        let e = err(&[wide, recording("metal", 9.0, 2)]);
+        assert_eq!(e.field, "recordings[0].readings[0].electrodes");
+        assert!(e.message.contains("2 to 40"), "{e}");
         assert_eq!(err(&[]).field, "recordings");
         let mut tiny = recording("foam", 5.0, 1);
         tiny.readings.truncate(50);
