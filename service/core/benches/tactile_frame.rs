@@ -181,21 +181,9 @@ fn main() {
 
 /// A calibration on samples 2–5 of each material (the bench's recordings are samples 1).
 fn fit_calibration() -> Option<Arc<Calibration>> {
-    let dir = graspd_testkit::testdata_dir().join("tactile/biotac_slide");
-    let classes = [
-        ("mat5", "plastic"),
-        ("mat8", "paper"),
-        ("mat9", "plastic"),
-        ("mat10", "plastic"),
-        ("mat13", "plastic"),
-        ("mat14", "paper"),
-        ("mat17", "foam"),
-        ("mat18", "foam"),
-        ("mat19", "foam"),
-        ("mat20", "metal"),
-    ];
+    let dir = graspd_testkit::biotac_slide_dir()?;
     let mut recordings = Vec::new();
-    for (mat, class) in classes {
+    for (mat, class) in graspd_testkit::BIOTAC_SLIDE_MATERIALS {
         for sample in 2..=5 {
             let path = dir.join(mat).join(format!("{mat}_{sample}_bio.csv"));
             let text = std::fs::read_to_string(path).ok()?;

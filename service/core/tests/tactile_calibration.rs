@@ -7,9 +7,9 @@
 //! calibrate at test time and are measured on; nothing fitted here is stored or shipped.
 //!
 //! `cargo test -p graspd-core --test tactile_calibration -- --nocapture` prints the tables
-//! (docs/tactile-calibration.md keeps them). The data directory is `$GRASPD_TACTILE_DATA` or
-//! `<repo>/../shared/testdata/tactile/biotac_slide`; the test is skipped (with a note) when
-//! neither exists.
+//! (docs/tactile-calibration.md keeps them). The data directory is
+//! `graspd_testkit::biotac_slide_dir` (`$GRASPD_TACTILE_DATA` or the shared testdata's
+//! `tactile/biotac_slide`); the test is skipped (with a note) when neither exists.
 
 use graspd_core::tactile::layout::SensorCatalog;
 use graspd_core::tactile::recording::Recording;
@@ -18,33 +18,9 @@ use graspd_core::tactile::{
     EventDetector, FingerConfig, Frame, Material, ModelFreeThresholds, Stabilizer,
     StabilizerConfig, TareConfig,
 };
+use graspd_testkit::{BIOTAC_SLIDE_MATERIALS, biotac_slide_dir};
 use std::collections::BTreeSet;
-use std::path::PathBuf;
 use std::sync::Arc;
-
-/// Materials of the set with the project's class (the data README's "Material classes").
-const MATERIALS: [(&str, &str); 10] = [
-    ("mat5", "plastic"),
-    ("mat8", "paper"),
-    ("mat9", "plastic"),
-    ("mat10", "plastic"),
-    ("mat13", "plastic"),
-    ("mat14", "paper"),
-    ("mat17", "foam"),
-    ("mat18", "foam"),
-    ("mat19", "foam"),
-    ("mat20", "metal"),
-];
-
-fn data_dir() -> Option<PathBuf> {
-    let p = std::env::var_os("GRASPD_TACTILE_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-                .join("../../../shared/testdata/tactile/biotac_slide")
-        });
-    p.is_dir().then_some(p)
-}
 
 /// One recording: its material, sample number and its labelled readings.
 struct Sample {
@@ -57,7 +33,7 @@ struct Sample {
 
 fn load(dir: &std::path::Path) -> Vec<Sample> {
     let mut out = Vec::new();
-    for (mat, class) in MATERIALS {
+    for (mat, class) in BIOTAC_SLIDE_MATERIALS {
         for sample in 1..=20 {
             let read = |kind: &str| {
                 std::fs::read_to_string(dir.join(mat).join(format!("{mat}_{sample}_{kind}.csv")))
@@ -109,7 +85,7 @@ fn settings() -> CalibrationSettings {
 
 #[test]
 fn the_split_is_by_recording() {
-    let Some(dir) = data_dir() else {
+    let Some(dir) = biotac_slide_dir() else {
         eprintln!("skipped: no BioTac recordings (set GRASPD_TACTILE_DATA)");
         return;
     };
@@ -125,7 +101,7 @@ fn the_split_is_by_recording() {
 
 #[test]
 fn a_calibration_on_other_recordings_tells_the_materials() {
-    let Some(dir) = data_dir() else {
+    let Some(dir) = biotac_slide_dir() else {
         eprintln!("skipped: no BioTac recordings (set GRASPD_TACTILE_DATA)");
         return;
     };

@@ -12,8 +12,8 @@
 //! The assertion is only a floor a little under what the detector currently achieves, so that a
 //! regression fails; the thresholds were not tuned on these recordings.
 //!
-//! The data directory is `$GRASPD_TACTILE_DATA` or `<repo>/../shared/testdata/tactile/
-//! biotac_slide`; the test is skipped (with a note) when neither exists.
+//! The data directory is `graspd_testkit::biotac_slide_dir` (`$GRASPD_TACTILE_DATA` or `tactile/
+//! biotac_slide` of the shared testdata); the test is skipped (with a note) when neither exists.
 
 use graspd_core::onnx_runtime::init_onnx_runtime;
 use graspd_core::tactile::detector::{ContactEvent, EventDetector, Material};
@@ -22,34 +22,12 @@ use graspd_core::tactile::recording::Recording;
 use graspd_core::tactile::stabilizer::{FingerConfig, Stabilizer, StabilizerConfig};
 use graspd_core::tactile::taring::TareConfig;
 use graspd_core::tactile::{LstmDetector, TactileModel};
+use graspd_testkit::{BIOTAC_SLIDE_MATERIALS, biotac_slide_dir};
 use std::path::PathBuf;
 use std::sync::Arc;
 
-/// Materials of the set with the project's class (README "Material classes").
-const MATERIALS: [(&str, &str); 10] = [
-    ("mat5", "plastic"),
-    ("mat8", "paper"),
-    ("mat9", "plastic"),
-    ("mat10", "plastic"),
-    ("mat13", "plastic"),
-    ("mat14", "paper"),
-    ("mat17", "foam"),
-    ("mat18", "foam"),
-    ("mat19", "foam"),
-    ("mat20", "metal"),
-];
 /// Samples per material replayed (of 20): 1..=SAMPLES.
 const SAMPLES: usize = 4;
-
-fn data_dir() -> Option<PathBuf> {
-    let p = std::env::var_os("GRASPD_TACTILE_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-                .join("../../../shared/testdata/tactile/biotac_slide")
-        });
-    p.is_dir().then_some(p)
-}
 
 fn idx(e: ContactEvent) -> usize {
     match e {
@@ -61,7 +39,7 @@ fn idx(e: ContactEvent) -> usize {
 
 #[test]
 fn model_free_detector_on_real_recordings() {
-    let Some(dir) = data_dir() else {
+    let Some(dir) = biotac_slide_dir() else {
         eprintln!("tactile recordings not found; skipping (set GRASPD_TACTILE_DATA)");
         return;
     };
@@ -70,7 +48,7 @@ fn model_free_detector_on_real_recordings() {
     let mut per_material: Vec<(String, u64, u64, u64)> = Vec::new(); // (class, n, contact ok, event ok)
     let mut frames_total = 0u64;
     let started = std::time::Instant::now();
-    for (mat, class) in MATERIALS {
+    for (mat, class) in BIOTAC_SLIDE_MATERIALS {
         let (mut n, mut contact_ok, mut event_ok) = (0u64, 0u64, 0u64);
         for s in 1..=SAMPLES {
             let base = dir.join(mat).join(format!("{mat}_{s}"));
@@ -117,7 +95,7 @@ fn model_free_detector_on_real_recordings() {
 
     println!(
         "\nModel-free detector on {} recordings ({} frames, {:.1} s, {:.0} frames/s in this test build)",
-        MATERIALS.len() * SAMPLES,
+        BIOTAC_SLIDE_MATERIALS.len() * SAMPLES,
         frames_total,
         elapsed.as_secs_f64(),
         frames_total as f64 / elapsed.as_secs_f64()
@@ -193,7 +171,7 @@ fn class_index(class: &str) -> usize {
 /// material graspd reported while in contact).
 #[test]
 fn lstm_model_on_real_recordings() {
-    let Some(dir) = data_dir() else {
+    let Some(dir) = biotac_slide_dir() else {
         eprintln!("tactile recordings not found; skipping (set GRASPD_TACTILE_DATA)");
         return;
     };
@@ -218,7 +196,7 @@ fn lstm_model_on_real_recordings() {
     let mut mat_recordings = [[0u64; 5]; 4];
     let started = std::time::Instant::now();
     let mut recordings = 0;
-    for (mat, class) in MATERIALS {
+    for (mat, class) in BIOTAC_SLIDE_MATERIALS {
         let c = class_index(class);
         for s in samples.clone() {
             let base = dir.join(mat).join(format!("{mat}_{s}"));

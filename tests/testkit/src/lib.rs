@@ -57,3 +57,28 @@ pub fn testdata_dir() -> PathBuf {
         _ => workspace_root().join("../shared/testdata"),
     }
 }
+
+/// The materials of the real BioTac slides (`tactile/biotac_slide`) with the class the data's
+/// README groups them in (its "Material classes" table: the four classes of Eq 6.4).
+pub const BIOTAC_SLIDE_MATERIALS: [(&str, &str); 10] = [
+    ("mat5", "plastic"),
+    ("mat8", "paper"),
+    ("mat9", "plastic"),
+    ("mat10", "plastic"),
+    ("mat13", "plastic"),
+    ("mat14", "paper"),
+    ("mat17", "foam"),
+    ("mat18", "foam"),
+    ("mat19", "foam"),
+    ("mat20", "metal"),
+];
+
+/// The real BioTac slides: `$GRASPD_TACTILE_DATA`, else `tactile/biotac_slide` of
+/// [`testdata_dir`]; `None` when the folder does not exist (tests then skip with a note).
+pub fn biotac_slide_dir() -> Option<PathBuf> {
+    let p = std::env::var_os("GRASPD_TACTILE_DATA")
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
+        .unwrap_or_else(|| testdata_dir().join("tactile/biotac_slide"));
+    p.is_dir().then_some(p)
+}

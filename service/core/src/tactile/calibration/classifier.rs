@@ -153,15 +153,11 @@ impl LinearDiscriminant {
 
     /// The classes (labels before the kind), sorted, with P(class | x): the sum over its kinds.
     pub fn class_probabilities(&self, x: &[f64]) -> Vec<(&str, f64)> {
-        let mut out: Vec<(&str, f64)> = Vec::new();
+        let mut out: std::collections::BTreeMap<&str, f64> = std::collections::BTreeMap::new();
         for (label, p) in self.labels.iter().zip(self.probabilities(x)) {
-            let c = class_of(label);
-            match out.last_mut() {
-                Some((last, q)) if *last == c => *q += p,
-                _ => out.push((c, p)),
-            }
+            *out.entry(class_of(label)).or_default() += p;
         }
-        out
+        out.into_iter().collect()
     }
 
     /// The most probable class.

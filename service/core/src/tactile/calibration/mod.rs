@@ -21,6 +21,7 @@ use crate::error::FieldError;
 use classifier::{LinearDiscriminant, class_of};
 use features::Features;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
 /// One labelled recording of one finger.
@@ -173,14 +174,9 @@ impl Calibration {
         } else {
             None
         };
-        let mut material_windows: Vec<(String, usize)> = Vec::new();
-        let mut labels: Vec<&String> = material_examples.iter().map(|(l, _)| l).collect();
-        labels.sort();
-        for l in labels {
-            match material_windows.last_mut() {
-                Some((last, n)) if last == l => *n += 1,
-                _ => material_windows.push((l.clone(), 1)),
-            }
+        let mut material_windows: BTreeMap<String, usize> = BTreeMap::new();
+        for (l, _) in &material_examples {
+            *material_windows.entry(l.clone()).or_default() += 1;
         }
         let mut event_windows = [0; 3];
         for (l, _) in &event_examples {
@@ -196,7 +192,7 @@ impl Calibration {
             events,
             summary: CalibrationSummary {
                 recordings: recordings.len(),
-                material_windows,
+                material_windows: material_windows.into_iter().collect(),
                 event_windows,
                 fit_ms: start.elapsed().as_secs_f64() * 1e3,
             },
