@@ -287,7 +287,17 @@ fn tactile_calibrate_then_stabilize_with_the_calibration() {
     let out = graspctl(&server, &["--json", "tactile", "calibrations"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let listed: serde_json::Value = serde_json::from_str(text(&out.stdout).trim()).unwrap();
-    assert_eq!(listed["name"], "slide");
+    assert_eq!(listed["calibrations"][0]["name"], "slide", "{listed}");
+    assert_eq!(
+        listed["calibrations"][0]["material_windows"][1]["label"],
+        "metal"
+    );
+    assert!(
+        listed["calibrations"][0]["event_windows"]["slip"]
+            .as_u64()
+            .unwrap()
+            > 0
+    );
 
     let held_out = slide.join("mat20/mat20_15_bio.csv");
     let out = graspctl(

@@ -11,6 +11,7 @@ use crate::{CliError, connect_tactile};
 use clap::{Args, Subcommand};
 use graspd::facade::{CalibrationUpload, RecordingUpload};
 use graspd::grpc::convert;
+use graspd::rest::json::{CalibrationJson, CalibrationsJson, EventWindowsJson, LabelCountJson};
 use graspd_core::FieldError;
 use graspd_core::tactile::{Baseline, ElectrodePolarity, TareConfig};
 use graspd_proto::v1 as pb;
@@ -97,11 +98,9 @@ fn labels(path: &Path) -> Result<BTreeMap<String, String>, CliError> {
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
-        let (folder, material) = line.split_once(',').ok_or_else(|| {
-            CliError::Answer(FieldError::new(
-                format!("{}:{}", path.display(), i + 1),
-                "expected folder,material",
-            ))
+        let (folder, material) = line.split_once(',').ok_or_else(|| CliError::File {
+            path: path.to_path_buf(),
+            error: FieldError::new(format!("line {}", i + 1), "expected folder,material"),
         })?;
         map.insert(folder.trim().to_string(), material.trim().to_string());
     }
@@ -209,10 +208,10 @@ pub async fn run(
         TactileCommand::Calibrate(args) => {
             let upload = args.upload()?;
             if upload.recordings.is_empty() {
-                return Err(CliError::Answer(FieldError::new(
-                    "DIR",
-                    format!("no *_bio.csv recordings under {}", args.dir.display()),
-                )));
+                return Err(CliError::File {
+                    path: args.dir.clone(),
+                    error: FieldError::new("DIR", "no *_bio.csv recordings under it"),
+                });
             }
             vec![
                 client
@@ -238,25 +237,50 @@ pub async fn run(
             return Ok(());
         }
     };
-    for info in &infos {
-        if json {
-            println!(
-                "{}",
-                serde_json::json!({
-                    "name": info.name,
-                    "electrodes": info.electrodes,
-                    "window_length": info.window_length,
-                    "stride": info.stride,
-                    "recordings": info.recordings,
-                    "material_windows": info.material_windows.iter().map(|l| serde_json::json!({"label": l.label, "windows": l.windows})).collect::<Vec<_>>(),
-                    "event_windows": info.event_windows,
-                    "fit_ms": info.fit_ms,
-                    "persisted": info.persisted,
-                })
-            );
-        } else {
+    if json {
+        let calibrations = infos
+            .iter()
+            .map(calibration_json)
+            .collect::<Result<Vec<_>, _>>()?;
+        let text = match command {
+            TactileCommand::Calibrations => {
+                serde_json::to_string_pretty(&CalibrationsJson { calibrations })?
+            }
+            _ => serde_json::to_string_pretty(&calibrations[0])?,
+        };
+        println!("{text}");
+    } else {
+        for info in &infos {
             print!("{}", summary(info));
         }
     }
     Ok(())
+}
+
+/// The answer in the REST API's shape (`CalibrationJson`).
+fn calibration_json(c: &pb::CalibrationInfo) -> Result<CalibrationJson, CliError> {
+    let windows = |i: usize| c.event_windows.get(i).map_or(0, |&n| n as usize);
+    Ok(CalibrationJson {
+        name: c.name.clone(),
+        electrodes: c.electrodes as usize,
+        window_length: c.window_length as usize,
+        stride: c.stride as usize,
+        tare: convert::tare_from_proto(c.tare, "tare").map_err(CliError::Answer)?,
+        material_windows: c
+            .material_windows
+            .iter()
+            .map(|l| LabelCountJson {
+                label: l.label.clone(),
+                windows: l.windows as usize,
+            })
+            .collect(),
+        event_windows: (c.event_windows.iter().sum::<u64>() > 0).then(|| EventWindowsJson {
+            non_contact: windows(0),
+            contact: windows(1),
+            slip: windows(2),
+        }),
+        recordings: c.recordings as usize,
+        fit_ms: c.fit_ms,
+        persisted: c.persisted,
+    })
 }

@@ -120,10 +120,7 @@ pub fn tactile_session_from_proto(
     })
 }
 
-pub(super) fn tare_from_proto(
-    t: Option<pb::TareSettings>,
-    field: &str,
-) -> Result<TareConfig, FieldError> {
+pub fn tare_from_proto(t: Option<pb::TareSettings>, field: &str) -> Result<TareConfig, FieldError> {
     let Some(t) = t else {
         return Ok(TareConfig::default());
     };
