@@ -4,9 +4,10 @@
 use prost::Message;
 use std::path::PathBuf;
 
-const PROTOS: [&str; 5] = [
+const PROTOS: [&str; 6] = [
     "graspd/v1/common.proto",
     "graspd/v1/hand.proto",
+    "graspd/v1/ros.proto",
     "graspd/v1/plan.proto",
     "graspd/v1/grasp_planner.proto",
     "graspd/v1/tactile_stabilizer.proto",

@@ -542,7 +542,7 @@ async fn a_grasp_type_model_decides_the_type_over_the_roi_and_places_the_attenti
         }
         request.output = Some(pb::OutputOptions {
             probability_maps_max_side: 32,
-            overlay: false,
+            ..Default::default()
         });
         let plan = server
             .grpc()

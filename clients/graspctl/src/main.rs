@@ -339,8 +339,8 @@ fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
             most_salient: false,
         },
         output: OutputOptions {
-            probability_maps_max_side: 0,
             overlay: args.overlay.is_some(),
+            ..OutputOptions::default()
         },
     })
 }

@@ -238,4 +238,8 @@ pub struct GraspPlan {
     /// What perception found, when the input was an RGB-D frame.
     #[serde(default)]
     pub perception: Option<crate::perception::PerceptionReport>,
+    /// The candidates in the layout of `moveit_msgs/Grasp`, when asked for
+    /// ([`super::moveit_grasp`]).
+    #[serde(default)]
+    pub moveit_grasps: Vec<super::moveit_grasp::MoveItGrasp>,
 }

@@ -9,6 +9,7 @@ pub mod grasp_plan;
 pub mod grip_forces;
 pub mod hand_pose;
 pub mod kinematic_model;
+pub mod moveit_grasp;
 pub mod object_shape;
 pub mod opposition;
 mod plan_assembly;

@@ -143,6 +143,7 @@ pub(super) fn assemble(
         seed: options.seed,
         warnings,
         perception: None,
+        moveit_grasps: Vec::new(),
     })
 }
 
@@ -377,6 +378,7 @@ fn plan_of_final(
         seed: options.seed,
         warnings,
         perception: None,
+        moveit_grasps: Vec::new(),
     })
 }
 

@@ -30,6 +30,21 @@ pub struct Limits {
 pub const DEFAULT_MAX_ITERATIONS: usize = 100_000;
 
 impl Limits {
+    /// A cloud of `n` points (as its message claims, before reading them) within `max_points`;
+    /// else TooLarge naming `field`.
+    pub fn check_points(&self, n: u64, field: &str) -> Result<(), super::ServiceError> {
+        if n > self.max_points as u64 {
+            return Err(super::ServiceError::TooLarge(FieldError::new(
+                field,
+                format!(
+                    "{n} points exceed the configured limit of {} (max_points)",
+                    self.max_points
+                ),
+            )));
+        }
+        Ok(())
+    }
+
     /// The limits' share of the options' rules (their ranges are
     /// `PlannerOptions::validate`'s): how much CPU one request may ask for.
     pub fn check_options(&self, o: &PlannerOptions) -> Result<(), FieldError> {

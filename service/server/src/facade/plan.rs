@@ -11,6 +11,7 @@ use graspd_core::perception::{
 };
 use graspd_core::plan_overlay::draw_overlay;
 use graspd_core::planning::PlaneSource;
+use graspd_core::planning::moveit_grasp::moveit_grasps;
 use graspd_core::{FieldError, GraspPlan, HandDescription, PlanHints, PlanInput};
 
 /// A decoded frame and the information extracted from it, kept until the plan is made.
@@ -56,12 +57,15 @@ impl GraspService {
     /// on a blocking thread. A planner panic becomes `Internal`, so one bad request cannot take
     /// the service down.
     pub fn plan(&self, request: PlanRequest) -> Result<GraspPlan, ServiceError> {
-        let output = request.output;
+        let output = request.output.clone();
         let (input, perceived) = self.prepare_with_perception(request)?;
         guarded("the planner", || {
             let mut plan = graspd_core::plan(input).map_err(ServiceError::from)?;
             if let Some(p) = perceived {
                 p.attach(&mut plan, &output);
+            }
+            if output.moveit_grasps {
+                plan.moveit_grasps = moveit_grasps(&plan, &output.frame_id);
             }
             Ok(plan)
         })

@@ -77,14 +77,31 @@ impl ImageHints {
     }
 }
 
-/// What to return besides the plan (RGB-D input).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+/// What to return besides the plan.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct OutputOptions {
     /// Return the grasp-type model's six maps with the longer side at most this many pixels
-    /// (0 = do not).
+    /// (0 = do not; RGB-D input).
     pub probability_maps_max_side: u32,
-    /// Draw the overlay PNG (ROI, attention point, heat map of s*, contacts, opposition).
+    /// Draw the overlay PNG (ROI, attention point, heat map of s*, contacts, opposition; RGB-D
+    /// input).
     pub overlay: bool,
+    /// Return the candidates also in the layout of `moveit_msgs/Grasp`
+    /// (`graspd_core::planning::moveit_grasp`).
+    pub moveit_grasps: bool,
+    /// The frame the plan is in, for the MoveIt grasps' headers ([`Self::in_frame`]).
+    pub frame_id: String,
+}
+
+impl OutputOptions {
+    /// The frame asked for, else the input's (a cloud's `frame_id`): what the MoveIt grasps'
+    /// headers name.
+    pub fn in_frame(mut self, input_frame: &str) -> Self {
+        if self.frame_id.is_empty() {
+            self.frame_id = input_frame.to_string();
+        }
+        self
+    }
 }
 
 /// One plan request in domain terms, as both transports produce it.

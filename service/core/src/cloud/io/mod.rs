@@ -1,4 +1,4 @@
-//! Point-cloud file formats (PCD, PLY) as untrusted input.
+//! Point-cloud file formats (PCD, PLY) and ROS `sensor_msgs/PointCloud2` as untrusted input.
 //!
 //! The readers take the whole file as bytes and return a [`PointCloud`] (x, y, z and, when the
 //! file has all three components, normals). Errors are [`FieldError`]s on the field
@@ -28,9 +28,11 @@
 
 mod pcd;
 mod ply;
+pub mod pointcloud2;
 
 pub use pcd::{read_pcd, write_pcd_ascii, write_pcd_binary};
 pub use ply::{read_ply, write_ply_ascii, write_ply_binary};
+pub use pointcloud2::{PointCloud2Layout, PointField, read_pointcloud2, write_pointcloud2};
 
 use super::PointCloud;
 use crate::error::FieldError;

@@ -3,18 +3,21 @@
 //! message as untrusted: every error names the offending field by its proto path.
 //!
 //! One file per message family: [`values`] (vectors, poses, enums), [`hands`], [`plan`]
-//! (PlanGrasp requests and responses), [`perception`], [`tactile`], [`calibration`].
+//! (PlanGrasp requests and responses), [`perception`], [`ros`] (PointCloud2 in, MoveIt grasps
+//! out), [`tactile`], [`calibration`].
 
 mod calibration;
 mod hands;
 mod perception;
 mod plan;
+mod ros;
 mod tactile;
 mod values;
 
 pub use calibration::*;
 pub use hands::*;
 pub use plan::*;
+pub use ros::*;
 pub use tactile::*;
 pub use values::*;
 

@@ -3,6 +3,7 @@
 
 use super::hands::*;
 use super::perception::*;
+use super::ros::*;
 use super::values::*;
 use crate::facade::{
     HandChoice, ImageHints, Limits, OutputOptions, PlanRequest, PlanSource, ServiceError,
@@ -237,16 +238,7 @@ fn hints_to_proto(h: &PlanHints, image: &ImageHints) -> pb::PlanHints {
 
 /// Decodes the packed cloud, refusing more points than the limit before allocating them.
 fn cloud_from_proto(c: pb::PointCloud, limits: &Limits) -> Result<PointCloud, ServiceError> {
-    let n = c.points.len() / 12;
-    if n > limits.max_points {
-        return Err(ServiceError::TooLarge(FieldError::new(
-            "cloud.points",
-            format!(
-                "{n} points exceed the configured limit of {} (max_points)",
-                limits.max_points
-            ),
-        )));
-    }
+    limits.check_points((c.points.len() / 12) as u64, "cloud.points")?;
     let points = decode_packed_xyz(&c.points, "cloud.points")?;
     let normals = if c.normals.is_empty() {
         None
@@ -261,8 +253,14 @@ pub fn plan_request_from_proto(
     r: pb::PlanGraspRequest,
     limits: &Limits,
 ) -> Result<PlanRequest, ServiceError> {
+    let input_frame = match &r.input {
+        Some(Input::Cloud(c)) => c.frame_id.clone(),
+        Some(Input::Cloud2(c)) => c.frame_id.clone(),
+        _ => String::new(),
+    };
     let source = match r.input {
         Some(Input::Cloud(c)) => PlanSource::Cloud(cloud_from_proto(c, limits)?),
+        Some(Input::Cloud2(c)) => PlanSource::Cloud(cloud2_from_proto(&c, "cloud2", limits)?),
         Some(Input::Rgbd(f)) => PlanSource::Rgbd(Box::new(rgbd_from_proto(f, "rgbd")?)),
         None => {
             return Err(FieldError::new("cloud", "give the input: a cloud (or rgbd)").into());
@@ -296,7 +294,10 @@ pub fn plan_request_from_proto(
         output: OutputOptions {
             probability_maps_max_side: o.probability_maps_max_side,
             overlay: o.overlay,
-        },
+            moveit_grasps: o.moveit_grasps,
+            frame_id: o.frame_id,
+        }
+        .in_frame(&input_frame),
     })
 }
 
@@ -329,6 +330,8 @@ pub fn plan_request_to_proto(r: &PlanRequest) -> pb::PlanGraspRequest {
         output: Some(pb::OutputOptions {
             probability_maps_max_side: r.output.probability_maps_max_side,
             overlay: r.output.overlay,
+            moveit_grasps: r.output.moveit_grasps,
+            frame_id: r.output.frame_id.clone(),
         }),
         extra_views: r.extra_views.iter().map(rgbd_to_proto).collect(),
     }
@@ -516,6 +519,7 @@ pub fn plan_to_proto(p: &GraspPlan) -> pb::PlanGraspResponse {
         squeeze_joints: joints_to_proto(&p.squeeze_joints),
         approach: p.approach.as_ref().map(vec3_to_proto),
         candidates: p.candidates.iter().map(candidate_to_proto).collect(),
+        moveit_grasps: p.moveit_grasps.iter().map(moveit_grasp_to_proto).collect(),
         quality: Some(quality_to_proto(q)),
         feasible: p.feasible,
         infeasible_reason: p.infeasible_reason.clone(),
@@ -584,6 +588,12 @@ pub fn plan_from_proto(p: pb::PlanGraspResponse) -> Result<GraspPlan, FieldError
         .enumerate()
         .map(|(i, c)| candidate_from_proto(c, &format!("candidates[{i}]")))
         .collect::<Result<_, _>>()?;
+    let moveit_grasps = p
+        .moveit_grasps
+        .into_iter()
+        .enumerate()
+        .map(|(i, g)| moveit_grasp_from_proto(g, &format!("moveit_grasps[{i}]")))
+        .collect::<Result<_, _>>()?;
     Ok(GraspPlan {
         hand: p.hand,
         grasp_type: required_grasp_type(p.grasp_type, "grasp_type")?,
@@ -650,5 +660,6 @@ pub fn plan_from_proto(p: pb::PlanGraspResponse) -> Result<GraspPlan, FieldError
             .perception
             .map(|r| perception_from_proto(r, p.overlay_png, attention_pixel))
             .transpose()?,
+        moveit_grasps,
     })
 }

@@ -1,6 +1,7 @@
 //! `POST /v1/plan`: the request (cloud or RGB-D, hints, options, output) and the response.
 
 use super::perception::*;
+use super::ros::*;
 use super::values::*;
 use crate::facade::{
     HandChoice, ImageHints, Limits, OutputOptions, PlanRequest, PlanSource, ServiceError,
@@ -105,6 +106,9 @@ pub struct HintsJson {
 pub struct PlanRequestJson {
     #[serde(default)]
     pub cloud: Option<CloudJson>,
+    /// A ROS `sensor_msgs/PointCloud2` as rosbridge writes it (`data` base64).
+    #[serde(default)]
+    pub cloud2: Option<PointCloud2Json>,
     /// RGB-D input (images as base64, or as the multipart parts `color` and `depth`).
     #[serde(default)]
     pub rgbd: Option<RgbdJson>,
@@ -127,13 +131,19 @@ pub struct PlanRequestJson {
 }
 
 /// What to return besides the plan.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize, ToSchema)]
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct OutputJson {
     #[serde(default)]
     pub probability_maps_max_side: u32,
     #[serde(default)]
     pub overlay: bool,
+    /// Return the candidates also in the layout of `moveit_msgs/Grasp` (`moveit_grasps`).
+    #[serde(default)]
+    pub moveit_grasps: bool,
+    /// The frame the plan is in, for the MoveIt grasps' headers; empty = the input cloud's.
+    #[serde(default)]
+    pub frame_id: String,
 }
 
 /// One image of an RGB-D frame: `data` base64 (absent when a multipart part carries it).
@@ -260,15 +270,7 @@ fn points_from_json(
         Vec3List::Values(v) => v.len(),
         Vec3List::Packed(b) => b.len() / 12,
     };
-    if n > limits.max_points {
-        return Err(ServiceError::TooLarge(FieldError::new(
-            field,
-            format!(
-                "{n} points exceed the configured limit of {} (max_points)",
-                limits.max_points
-            ),
-        )));
-    }
+    limits.check_points(n as u64, field)?;
     Ok(match list {
         Vec3List::Values(v) => v
             .into_iter()
@@ -305,7 +307,20 @@ pub fn plan_request_from_json(
         )
         .into());
     }
-    let source = match (r.cloud, r.rgbd, file_cloud) {
+    let input_frame = match (&r.cloud, &r.cloud2) {
+        (Some(c), _) => c.frame_id.clone(),
+        (None, Some(c)) => c.header.frame_id.clone(),
+        (None, None) => String::new(),
+    };
+    let cloud = match (r.cloud, r.cloud2) {
+        (Some(_), Some(_)) => {
+            return Err(FieldError::new("cloud2", "give either cloud or cloud2, not both").into());
+        }
+        (Some(c), None) => Some(cloud_from_json(c, limits)?),
+        (None, Some(c)) => Some(cloud2_from_json(&c, limits)?),
+        (None, None) => None,
+    };
+    let source = match (cloud, r.rgbd, file_cloud) {
         (Some(_), _, Some(_)) => {
             return Err(FieldError::new(
                 "cloud",
@@ -324,7 +339,7 @@ pub fn plan_request_from_json(
         (None, Some(f), None) => {
             PlanSource::Rgbd(Box::new(rgbd_from_json(f, image_parts, "rgbd")?))
         }
-        (Some(c), None, None) => PlanSource::Cloud(cloud_from_json(c, limits)?),
+        (Some(c), None, None) => PlanSource::Cloud(c),
         (None, None, Some(c)) => PlanSource::Cloud(c),
         (None, None, None) => {
             return Err(FieldError::new(
@@ -385,7 +400,10 @@ pub fn plan_request_from_json(
         output: OutputOptions {
             probability_maps_max_side: o.probability_maps_max_side,
             overlay: o.overlay,
-        },
+            moveit_grasps: o.moveit_grasps,
+            frame_id: o.frame_id,
+        }
+        .in_frame(&input_frame),
     })
 }
 
@@ -562,6 +580,9 @@ pub struct PlanResponseJson {
     /// Set for RGB-D input.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub perception: Option<PerceptionJson>,
+    /// The candidates in the layout of `moveit_msgs/Grasp`, when `output.moveit_grasps` was set.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub moveit_grasps: Vec<MoveItGraspJson>,
 }
 
 impl From<&GraspPlan> for PlanResponseJson {
@@ -614,6 +635,7 @@ impl From<&GraspPlan> for PlanResponseJson {
             seed: p.seed,
             warnings: p.warnings.clone(),
             perception: p.perception.as_ref().map(PerceptionJson::from),
+            moveit_grasps: p.moveit_grasps.iter().map(MoveItGraspJson::from).collect(),
         }
     }
 }
