@@ -422,6 +422,7 @@ pub fn rgbd_frame_proto(r: &RgbdRender, with_pose: bool) -> pb::RgbdFrame {
         encoding: encoding.into(),
         step: 0,
         data,
+        is_bigendian: false,
     };
     pb::RgbdFrame {
         color: Some(image("rgb8", r.rgb.clone())),
@@ -431,6 +432,7 @@ pub fn rgbd_frame_proto(r: &RgbdRender, with_pose: bool) -> pb::RgbdFrame {
             fy: r.intrinsics.fy,
             cx: r.intrinsics.cx,
             cy: r.intrinsics.cy,
+            k: Vec::new(),
         }),
         depth_scale: 0.0,
         camera_to_world: with_pose.then(|| camera_pose(r)),

@@ -149,6 +149,52 @@ fn assert_plan_on_the_can(plan: &GraspPlan, r: &RgbdRender, what: &str) {
     assert!(plan.feasible, "{what}: {:?}", plan.infeasible_reason);
 }
 
+/// A frame as a ROS camera driver publishes it — `bgra8` colour, big-endian `16UC1` depth
+/// padded to a longer row, intrinsics as `CameraInfo.K` — plans exactly like the plain frame
+/// (issue 20).
+#[tokio::test]
+async fn a_frame_in_ros_layouts_plans_like_the_plain_one() {
+    let server = Server::start();
+    let r = scene();
+    let pixel = Some(r.object_pixel(0));
+    let mut plain = plan_frame(&server, rgbd_frame_proto(r, true), pixel).await;
+    let mut ros = rgbd_frame_proto(r, true);
+    let color = ros.color.as_mut().unwrap();
+    color.encoding = "bgra8".into();
+    color.data = r
+        .rgb
+        .chunks_exact(3)
+        .flat_map(|p| [p[2], p[1], p[0], 255])
+        .collect();
+    let depth = ros.depth.as_mut().unwrap();
+    let row = 2 * r.width;
+    depth.is_bigendian = true;
+    depth.step = (row + 6) as u32;
+    depth.data = depth
+        .data
+        .chunks_exact(row)
+        .flat_map(|line| {
+            let mut be: Vec<u8> = line.chunks_exact(2).flat_map(|b| [b[1], b[0]]).collect();
+            be.extend_from_slice(&[0xEE; 6]);
+            be
+        })
+        .collect();
+    let k = ros.intrinsics.as_mut().unwrap();
+    *k = pb::CameraIntrinsics {
+        k: vec![k.fx, 0.0, k.cx, 0.0, k.fy, k.cy, 0.0, 0.0, 1.0],
+        ..Default::default()
+    };
+    let mut ros = plan_frame(&server, ros, pixel).await;
+    for p in [&mut plain, &mut ros] {
+        p.timings = None;
+        p.perception.as_mut().unwrap().timings = None;
+        for s in [&mut p.stage1, &mut p.stage2].into_iter().flatten() {
+            s.seconds = 0.0;
+        }
+    }
+    assert_eq!(ros, plain);
+}
+
 #[tokio::test]
 async fn an_rgbd_frame_plans_the_hinted_object_alike_over_grpc_and_rest() {
     let server = Server::start();

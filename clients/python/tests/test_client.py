@@ -11,7 +11,18 @@ import numpy as np
 import pytest
 
 from graspd.v1 import common_pb2, tactile_stabilizer_pb2 as tactile_pb2
-from graspd_client import Client, Finger, Reading, cloud_message, field_of, points_of, rgbd_message
+from graspd_client import (
+    Client,
+    Finger,
+    Reading,
+    cloud_message,
+    field_of,
+    moveit_grasps_of,
+    pointcloud2_from_ros,
+    pointcloud2_message,
+    points_of,
+    rgbd_message,
+)
 
 HERE = Path(__file__).resolve().parent
 
@@ -85,6 +96,57 @@ def test_the_same_seed_gives_the_same_plan(server):
         b = c.plan_cloud(pts, hand="barrett", seed=7, support_plane=TABLE)
     assert [ct.point_index for ct in a.contacts] == [ct.point_index for ct in b.contacts]
     assert a.hand_pose == b.hand_pose
+
+
+def test_pointcloud2_plans_like_the_packed_cloud(server):
+    pts = can()
+    # Organised: 40 columns, every seventh pixel invalid (NaN), as a depth camera's driver writes.
+    cells = len(pts) + len(pts) // 6 + 40
+    grid = np.full((cells // 40, 40, 3), np.nan)
+    flat = grid.reshape(-1, 3)
+    valid = [i for i in range(len(flat)) if i % 7 != 6][: len(pts)]
+    flat[valid] = pts
+    organised = pointcloud2_message(grid, frame_id="camera")
+    assert (organised.height, organised.width, organised.is_dense) == (grid.shape[0], 40, False)
+
+    class Ros:  # what rclpy hands over: the same fields, data as a bytes-like array
+        def __init__(self, m):
+            for name in ("height", "width", "fields", "is_bigendian", "point_step", "row_step",
+                         "is_dense"):
+                setattr(self, name, getattr(m, name))
+            self.data = bytearray(m.data)
+            self.header = type("Header", (), {"frame_id": m.frame_id})()
+
+    with Client(server.grpc) as c:
+        packed = c.plan_cloud(pts, hand="barrett", seed=4, support_plane=TABLE)
+        for cloud in (pointcloud2_message(pts), organised, pointcloud2_from_ros(Ros(organised))):
+            plan = c.plan_pointcloud2(cloud, hand="barrett", seed=4, support_plane=TABLE)
+            assert [ct.position for ct in plan.contacts] == [ct.position for ct in packed.contacts]
+            assert plan.hand_pose == packed.hand_pose
+        bad = pointcloud2_message(pts)
+        bad.row_step -= 1
+        with pytest.raises(grpc.RpcError) as e:
+            c.plan_pointcloud2(bad, hand="barrett")
+        assert field_of(e.value) == "cloud2.row_step"
+
+
+def test_moveit_grasps_come_in_the_ros_layout(server):
+    with Client(server.grpc) as c:
+        plan = c.plan_pointcloud2(pointcloud2_message(can(), frame_id="base_link"), hand="barrett",
+                                  seed=2, support_plane=TABLE, moveit_grasps=True, candidates=2)
+    grasps = moveit_grasps_of(plan)
+    assert len(grasps) == max(1, len(plan.candidates))
+    g = grasps[0]
+    assert g["id"] == f"graspd-{plan.seed}-0"
+    assert g["grasp_pose"]["header"]["frame_id"] == "base_link"
+    position = g["grasp_pose"]["pose"]["position"]
+    assert [position["x"], position["y"], position["z"]] == pytest.approx(
+        [plan.hand_pose.position.x, plan.hand_pose.position.y, plan.hand_pose.position.z])
+    approach = g["pre_grasp_approach"]["direction"]["vector"]
+    assert [approach["x"], approach["y"], approach["z"]] == pytest.approx(
+        [plan.approach.x, plan.approach.y, plan.approach.z])
+    assert g["post_grasp_retreat"]["direction"]["vector"] == {"x": 0.0, "y": 0.0, "z": 1.0}
+    assert g["grasp_quality"] == pytest.approx(plan.quality.objective)
 
 
 def test_bad_input_is_named_and_the_next_request_works(server):

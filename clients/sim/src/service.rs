@@ -160,6 +160,7 @@ fn frame_to_proto(image: &RgbdImage) -> pb::RgbdFrame {
             encoding: "rgb8".into(),
             step: intr.width * 3,
             data: image.rgb.clone(),
+            is_bigendian: false,
         }),
         depth: Some(pb::Image {
             width: intr.width,
@@ -167,12 +168,14 @@ fn frame_to_proto(image: &RgbdImage) -> pb::RgbdFrame {
             encoding: "32FC1".into(),
             step: intr.width * 4,
             data: image.depth.iter().flat_map(|d| d.to_le_bytes()).collect(),
+            is_bigendian: false,
         }),
         intrinsics: Some(pb::CameraIntrinsics {
             fx: intr.fx,
             fy: intr.fy,
             cx: intr.cx,
             cy: intr.cy,
+            k: Vec::new(),
         }),
         depth_scale: 1.0,
         camera_to_world: Some(pose_to_proto(&image.camera_to_world)),

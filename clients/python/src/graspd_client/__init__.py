@@ -25,11 +25,14 @@ from typing import Iterable, Optional, Sequence
 import grpc
 import numpy as np
 
+from google.protobuf import json_format
+
 from graspd.v1 import (
     common_pb2,
     grasp_planner_pb2_grpc,
     hand_pb2,
     plan_pb2,
+    ros_pb2,
     tactile_stabilizer_pb2 as tactile_pb2,
     tactile_stabilizer_pb2_grpc,
 )
@@ -41,6 +44,9 @@ __all__ = [
     "StabilizerSession",
     "cloud_message",
     "field_of",
+    "moveit_grasps_of",
+    "pointcloud2_from_ros",
+    "pointcloud2_message",
     "rgbd_message",
     "points_of",
 ]
@@ -85,6 +91,77 @@ def cloud_message(points, normals=None, frame_id: str = "") -> plan_pb2.PointClo
 def points_of(msg: plan_pb2.PointCloud) -> np.ndarray:
     """The packed cloud back as an (N, 3) float64 array."""
     return np.frombuffer(msg.points, dtype="<f4").reshape(-1, 3).astype(np.float64)
+
+
+FLOAT32 = 7  # sensor_msgs/PointField.FLOAT32
+
+
+def pointcloud2_message(points, normals=None, frame_id: str = "") -> ros_pb2.PointCloud2:
+    """An (N, 3) array, or an organised (H, W, 3) one with NaN for invalid pixels, in metres (and
+    optional unit normals of the same shape) as a little-endian float32 sensor_msgs/PointCloud2
+    (x, y, z[, normal_x, normal_y, normal_z])."""
+    a = np.asarray(points, dtype=np.float64)
+    if a.ndim == 3 and a.shape[2] == 3:
+        height, width = a.shape[:2]
+    elif a.ndim == 2 and a.shape[1] == 3:
+        height, width = 1, a.shape[0]
+    else:
+        raise ValueError(f"points: expected an (N, 3) or (H, W, 3) array, got shape {a.shape}")
+    columns = [a.reshape(-1, 3)]
+    names = ["x", "y", "z"]
+    if normals is not None:
+        n = np.asarray(normals, dtype=np.float64)
+        if n.shape != a.shape:
+            raise ValueError(f"normals: shape {n.shape} does not match points {a.shape}")
+        columns.append(n.reshape(-1, 3))
+        names += ["normal_x", "normal_y", "normal_z"]
+    data = np.concatenate(columns, axis=1).astype("<f4")
+    step = 4 * len(names)
+    return ros_pb2.PointCloud2(
+        height=height,
+        width=width,
+        fields=[ros_pb2.PointField(name=nm, offset=4 * i, datatype=FLOAT32, count=1)
+                for i, nm in enumerate(names)],
+        is_bigendian=False,
+        point_step=step,
+        row_step=step * width,
+        data=data.tobytes(),
+        is_dense=not np.isnan(a).any(),
+        frame_id=frame_id,
+    )
+
+
+def pointcloud2_from_ros(msg) -> ros_pb2.PointCloud2:
+    """A ROS ``sensor_msgs/PointCloud2`` (rclpy or rospy message, or anything with its fields) as
+    graspd's message, field for field: the bytes go as the driver wrote them."""
+    return ros_pb2.PointCloud2(
+        height=msg.height,
+        width=msg.width,
+        fields=[ros_pb2.PointField(name=f.name, offset=f.offset, datatype=f.datatype,
+                                   count=f.count) for f in msg.fields],
+        is_bigendian=bool(msg.is_bigendian),
+        point_step=msg.point_step,
+        row_step=msg.row_step,
+        data=bytes(msg.data),
+        is_dense=bool(msg.is_dense),
+        frame_id=msg.header.frame_id,
+    )
+
+
+def moveit_grasps_of(plan: plan_pb2.PlanGraspResponse) -> list:
+    """The plan's ``moveit_grasps`` as dicts in the layout of ROS 2's moveit_msgs/msg/Grasp (field
+    names and nesting), ready for ``rosidl_runtime_py.set_message_fields(Grasp(), d)``."""
+    out = []
+    for g in plan.moveit_grasps:
+        d = json_format.MessageToDict(g, preserving_proto_field_name=True,
+                                      always_print_fields_with_no_presence=True)
+        # proto3 JSON writes 64-bit integers as strings; ROS wants numbers.
+        for posture in ("pre_grasp_posture", "grasp_posture"):
+            for point in d[posture]["points"]:
+                t = point["time_from_start"]
+                t["sec"], t["nanosec"] = int(t.get("sec", 0)), int(t.get("nanosec", 0))
+        out.append(d)
+    return out
 
 
 def _image(array: np.ndarray, encoding: str) -> plan_pb2.Image:
@@ -308,6 +385,31 @@ class Client:
                 without_opposition,
             )
         )
+
+    def plan_pointcloud2(
+        self,
+        cloud: ros_pb2.PointCloud2,
+        hand: str = "parallel_gripper",
+        seed: int = 0,
+        moveit_grasps: bool = False,
+        candidates: Optional[int] = None,
+        **kwargs,
+    ) -> plan_pb2.PlanGraspResponse:
+        """Plans on a PointCloud2 (``pointcloud2_message`` or ``pointcloud2_from_ros``); with
+        ``moveit_grasps`` the response carries each ranked candidate as a moveit_msgs/Grasp
+        (``moveit_grasps_of``). Other keywords as for ``plan_cloud``."""
+        request = self._request(
+            plan_pb2.PlanGraspRequest(cloud2=cloud), hand, seed,
+            kwargs.pop("grasp_type", None), kwargs.pop("support_plane", None),
+            kwargs.pop("viewpoint", None), kwargs.pop("attention_point", None),
+            kwargs.pop("without_opposition", False),
+        )
+        if kwargs:
+            raise TypeError(f"unexpected arguments: {sorted(kwargs)}")
+        request.output.moveit_grasps = moveit_grasps
+        if candidates is not None:
+            request.options.candidates = int(candidates)
+        return self.plan(request)
 
     def plan_rgbd(self, color, depth, fx, fy, cx, cy, hand: str = "parallel_gripper",
                   seed: int = 0, camera_to_world=None,

@@ -25,6 +25,7 @@ pub mod depth_to_cloud;
 pub mod grasp_type;
 pub mod information;
 pub mod rgbd;
+pub mod rgbd_wire;
 pub mod roi;
 pub mod saliency;
 pub mod segmentation;
@@ -41,8 +42,8 @@ pub use information::{
 };
 pub use rgbd::{
     CameraIntrinsics, ColorEncoding, DecodedFrame, DepthEncoding, ImageData, RgbdFrame, RgbdLimits,
-    WireImage, camera_pose, sniff_encoding,
 };
+pub use rgbd_wire::{WireImage, camera_pose, sniff_encoding};
 pub use roi::{RegionParams, SalientRegions, mask_box, region_of_interest, salient_regions};
 pub use saliency::{Plane32, SaliencyParams, saliency_map};
 pub use segmentation::{

@@ -1,18 +1,21 @@
 //! The RGB-D frame as robot stacks send it (method.md §4; ROS `sensor_msgs/Image` and
 //! `CameraInfo` conventions) and its decoding into a registered colour + metric depth image.
 //!
-//! Colour comes as raw `rgb8` / `bgr8` rows or as PNG / JPEG bytes; depth as raw `16UC1`
+//! Colour comes as raw `rgb8` / `bgr8` / `rgba8` / `bgra8` rows or as PNG / JPEG bytes; depth as raw `16UC1`
 //! (millimetres), raw `32FC1` (metres) or a 16-bit grayscale PNG (millimetres, the format of
 //! most RGB-D data sets). Raw rows are little-endian with a row stride `step` (0: packed). Depth
 //! must be registered to the colour image: both have the frame's `width` × `height`, and pixel
 //! (u, v) of one is pixel (u, v) of the other.
+//!
+//! The frame as the transports receive it (sizes, encoding names, `is_bigendian`, `CameraInfo.K`)
+//! is read in [`super::rgbd_wire`].
 //!
 //! Every check names the offending field (`rgbd.color.data`, `rgbd.depth.encoding`,
 //! `rgbd.intrinsics.fx`, …) so that the transports can answer INVALID_ARGUMENT / HTTP 400.
 
 use crate::error::FieldError;
 use image::{DynamicImage, ImageFormat, ImageReader, Limits};
-use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion};
+use nalgebra::Isometry3;
 use std::fmt;
 use std::io::Cursor;
 
@@ -23,6 +26,10 @@ pub enum ColorEncoding {
     Rgb8,
     /// Raw 8-bit B, G, R per pixel (ROS `bgr8`, OpenCV's order).
     Bgr8,
+    /// Raw 8-bit R, G, B, A per pixel (ROS `rgba8`; alpha is dropped).
+    Rgba8,
+    /// Raw 8-bit B, G, R, A per pixel (ROS `bgra8`; alpha is dropped).
+    Bgra8,
     /// A PNG file (8- or 16-bit, grey, RGB or RGBA; alpha is dropped).
     Png,
     /// A JPEG file.
@@ -30,16 +37,21 @@ pub enum ColorEncoding {
 }
 
 impl ColorEncoding {
-    /// Parses the wire name (`rgb8`, `bgr8`, `png`, `jpeg`/`jpg`, case-insensitive).
+    /// Parses the wire name (`rgb8`, `bgr8`, `rgba8`, `bgra8`, `png`, `jpeg`/`jpg`,
+    /// case-insensitive).
     pub fn parse(name: &str, field: &str) -> Result<Self, FieldError> {
         match name.to_ascii_lowercase().as_str() {
             "rgb8" => Ok(Self::Rgb8),
             "bgr8" => Ok(Self::Bgr8),
+            "rgba8" => Ok(Self::Rgba8),
+            "bgra8" => Ok(Self::Bgra8),
             "png" => Ok(Self::Png),
             "jpeg" | "jpg" => Ok(Self::Jpeg),
             _ => Err(FieldError::new(
                 field,
-                format!("unknown colour encoding {name:?}; use rgb8, bgr8, png or jpeg"),
+                format!(
+                    "unknown colour encoding {name:?}; use rgb8, bgr8, rgba8, bgra8, png or jpeg"
+                ),
             )),
         }
     }
@@ -48,6 +60,7 @@ impl ColorEncoding {
     pub fn bytes_per_pixel(self) -> Option<usize> {
         match self {
             Self::Rgb8 | Self::Bgr8 => Some(3),
+            Self::Rgba8 | Self::Bgra8 => Some(4),
             Self::Png | Self::Jpeg => None,
         }
     }
@@ -58,6 +71,8 @@ impl fmt::Display for ColorEncoding {
         f.write_str(match self {
             Self::Rgb8 => "rgb8",
             Self::Bgr8 => "bgr8",
+            Self::Rgba8 => "rgba8",
+            Self::Bgra8 => "bgra8",
             Self::Png => "png",
             Self::Jpeg => "jpeg",
         })
@@ -289,138 +304,6 @@ impl RgbdFrame {
     }
 }
 
-/// One image of a frame as the transports receive it: the declared size (0 × 0 for a PNG or
-/// JPEG, whose header gives it), the encoding's wire name (empty: PNG or JPEG told by its magic
-/// bytes), the row stride of a raw image (0 = packed) and the bytes.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct WireImage {
-    pub width: u32,
-    pub height: u32,
-    pub encoding: String,
-    pub step: u32,
-    pub data: Vec<u8>,
-}
-
-/// `png` or `jpeg` by the file's magic bytes, for an image sent without an encoding name.
-pub fn sniff_encoding(data: &[u8]) -> Option<&'static str> {
-    if data.starts_with(&[0x89, b'P', b'N', b'G']) {
-        Some("png")
-    } else if data.starts_with(&[0xFF, 0xD8]) {
-        Some("jpeg")
-    } else {
-        None
-    }
-}
-
-impl WireImage {
-    /// The encoding name, sniffed when left empty.
-    fn encoding_name(&self) -> &str {
-        if self.encoding.is_empty() {
-            sniff_encoding(&self.data).unwrap_or("")
-        } else {
-            &self.encoding
-        }
-    }
-
-    /// The declared size, read from a PNG / JPEG header when both sides are 0. Errors name
-    /// `{field}.width` / `{field}.data`.
-    fn size(&self, compressed: bool, field: &str) -> Result<(usize, usize), FieldError> {
-        let (width, height) = (self.width, self.height);
-        if width > 0 && height > 0 {
-            return Ok((width as usize, height as usize));
-        }
-        if !compressed || (width, height) != (0, 0) {
-            return Err(FieldError::new(
-                format!("{field}.{}", if width == 0 { "width" } else { "height" }),
-                format!(
-                    "the image is {width}×{height}; both sides must be > 0 (they may be left 0 only \
-                     for png or jpeg, whose size is read from the file)"
-                ),
-            ));
-        }
-        let dims = ImageReader::new(Cursor::new(&self.data))
-            .with_guessed_format()
-            .ok()
-            .and_then(|r| r.into_dimensions().ok())
-            .ok_or_else(|| {
-                FieldError::new(
-                    format!("{field}.data"),
-                    format!("not a readable PNG or JPEG ({} bytes)", self.data.len()),
-                )
-            })?;
-        Ok((dims.0 as usize, dims.1 as usize))
-    }
-}
-
-/// A camera pose from a position and a quaternion (w, x, y, z) as sent: the quaternion is
-/// normalised; a zero or non-finite one is refused naming `{field}.orientation`.
-pub fn camera_pose(
-    position: Point3<f64>,
-    q: Quaternion<f64>,
-    field: &str,
-) -> Result<Isometry3<f64>, FieldError> {
-    let norm = q.norm();
-    if !norm.is_finite() || norm < 1e-9 {
-        return Err(FieldError::new(
-            format!("{field}.orientation"),
-            "must be a finite, non-zero quaternion",
-        ));
-    }
-    Ok(Isometry3::from_parts(
-        position.coords.into(),
-        UnitQuaternion::from_quaternion(q),
-    ))
-}
-
-impl RgbdFrame {
-    /// The frame from its two images as received (both transports and the CLI build it here):
-    /// encodings parsed, sizes declared or read from the files, and colour and depth of one
-    /// size. Pixels are checked later, by [`RgbdFrame::decode`]. `field` names the frame in
-    /// errors (`rgbd.color.encoding`, `rgbd.depth`, …).
-    pub fn from_wire(
-        color: WireImage,
-        depth: WireImage,
-        intrinsics: CameraIntrinsics,
-        depth_scale: Option<f64>,
-        camera_to_world: Option<Isometry3<f64>>,
-        field: &str,
-    ) -> Result<Self, FieldError> {
-        let (cf, df) = (format!("{field}.color"), format!("{field}.depth"));
-        let color_encoding =
-            ColorEncoding::parse(color.encoding_name(), &format!("{cf}.encoding"))?;
-        let depth_encoding =
-            DepthEncoding::parse(depth.encoding_name(), &format!("{df}.encoding"))?;
-        let color_size = color.size(color_encoding.bytes_per_pixel().is_none(), &cf)?;
-        let depth_size = depth.size(depth_encoding.bytes_per_pixel().is_none(), &df)?;
-        if color_size != depth_size {
-            return Err(FieldError::new(
-                df,
-                format!(
-                    "the depth image is {}×{} but the colour image is {}×{}; register them to one size",
-                    depth_size.0, depth_size.1, color_size.0, color_size.1
-                ),
-            ));
-        }
-        Ok(RgbdFrame {
-            color: ImageData {
-                encoding: color_encoding,
-                data: color.data,
-                step: color.step as usize,
-            },
-            depth: ImageData {
-                encoding: depth_encoding,
-                data: depth.data,
-                step: depth.step as usize,
-            },
-            width: color_size.0,
-            height: color_size.1,
-            intrinsics,
-            depth_scale: depth_scale.filter(|s| *s != 0.0),
-            camera_to_world,
-        })
-    }
-}
-
 /// Checks the byte count of a raw image and returns its row stride.
 fn raw_rows(
     data: &[u8],
@@ -506,16 +389,22 @@ fn decode_color(
     limits: &RgbdLimits,
 ) -> Result<Vec<u8>, FieldError> {
     match img.encoding {
-        ColorEncoding::Rgb8 | ColorEncoding::Bgr8 => {
-            let step = raw_rows(&img.data, img.step, 3, w, h, &img.encoding, field)?;
+        ColorEncoding::Rgb8 | ColorEncoding::Bgr8 | ColorEncoding::Rgba8 | ColorEncoding::Bgra8 => {
+            let bpp = img.encoding.bytes_per_pixel().unwrap_or(3);
+            let bgr = matches!(img.encoding, ColorEncoding::Bgr8 | ColorEncoding::Bgra8);
+            let step = raw_rows(&img.data, img.step, bpp, w, h, &img.encoding, field)?;
             let mut rgb = Vec::with_capacity(3 * w * h);
             for row in img.data.chunks_exact(step) {
-                let row = &row[..3 * w];
+                let row = &row[..bpp * w];
                 if img.encoding == ColorEncoding::Rgb8 {
                     rgb.extend_from_slice(row);
                 } else {
-                    for px in row.chunks_exact(3) {
-                        rgb.extend_from_slice(&[px[2], px[1], px[0]]);
+                    for px in row.chunks_exact(bpp) {
+                        if bgr {
+                            rgb.extend_from_slice(&[px[2], px[1], px[0]]);
+                        } else {
+                            rgb.extend_from_slice(&px[..3]);
+                        }
                     }
                 }
             }

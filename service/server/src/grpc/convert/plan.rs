@@ -145,6 +145,7 @@ fn rgbd_from_proto(f: pb::RgbdFrame, field: &str) -> Result<RgbdFrame, FieldErro
             width: i.width,
             height: i.height,
             encoding: i.encoding,
+            is_bigendian: i.is_bigendian,
             step: i.step,
             data: i.data,
         }
@@ -166,12 +167,7 @@ fn rgbd_from_proto(f: pb::RgbdFrame, field: &str) -> Result<RgbdFrame, FieldErro
     RgbdFrame::from_wire(
         wire(f.color),
         wire(f.depth),
-        CameraIntrinsics {
-            fx: k.fx,
-            fy: k.fy,
-            cx: k.cx,
-            cy: k.cy,
-        },
+        CameraIntrinsics::from_wire(k.fx, k.fy, k.cx, k.cy, &k.k, &format!("{field}.intrinsics"))?,
         Some(f.depth_scale),
         camera_to_world,
         field,
@@ -186,6 +182,7 @@ fn rgbd_to_proto(f: &RgbdFrame) -> pb::RgbdFrame {
         encoding,
         step: step as u32,
         data: data.to_vec(),
+        is_bigendian: false,
     };
     pb::RgbdFrame {
         color: Some(image(
@@ -203,6 +200,7 @@ fn rgbd_to_proto(f: &RgbdFrame) -> pb::RgbdFrame {
             fy: f.intrinsics.fy,
             cx: f.intrinsics.cx,
             cy: f.intrinsics.cy,
+            k: Vec::new(),
         }),
         depth_scale: f.depth_scale.unwrap_or(0.0),
         camera_to_world: f.camera_to_world.as_ref().map(|t| {

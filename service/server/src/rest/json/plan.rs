@@ -154,23 +154,34 @@ pub struct ImageJson {
     pub width: u32,
     #[serde(default)]
     pub height: u32,
-    /// rgb8, bgr8, png, jpeg (colour); 16UC1, 32FC1, png (depth). May be left out for a
-    /// multipart PNG / JPEG part.
+    /// rgb8, bgr8, rgba8, bgra8, png, jpeg (colour); 16UC1, 32FC1, png (depth). May be left
+    /// out for a multipart PNG / JPEG part.
     #[serde(default)]
     pub encoding: String,
+    /// Multi-byte raw pixels (16UC1, 32FC1) are big-endian (ROS `is_bigendian`).
+    #[serde(default)]
+    pub is_bigendian: bool,
     #[serde(default)]
     pub step: u32,
     #[serde(default)]
     pub data: Option<String>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize, ToSchema)]
+/// fx, fy, cx, cy, or ROS `CameraInfo.K` as it is (`k`: 9 values, row-major), or both when
+/// they agree.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct IntrinsicsJson {
+    #[serde(default)]
     pub fx: f64,
+    #[serde(default)]
     pub fy: f64,
+    #[serde(default)]
     pub cx: f64,
+    #[serde(default)]
     pub cy: f64,
+    #[serde(default)]
+    pub k: Vec<f64>,
 }
 
 /// The RgbdFrame in JSON.
@@ -219,6 +230,7 @@ fn wire_image(img: ImageJson, part: Option<Vec<u8>>, field: &str) -> Result<Wire
         width: img.width,
         height: img.height,
         encoding: img.encoding,
+        is_bigendian: img.is_bigendian,
         step: img.step,
         data,
     })
@@ -232,7 +244,7 @@ fn rgbd_from_json(f: RgbdJson, parts: ImageParts, field: &str) -> Result<RgbdFra
     let k = f.intrinsics.ok_or_else(|| {
         FieldError::new(
             format!("{field}.intrinsics"),
-            "is required (fx, fy, cx, cy)",
+            "is required (fx, fy, cx, cy, or k)",
         )
     })?;
     let camera_to_world = f
@@ -249,12 +261,7 @@ fn rgbd_from_json(f: RgbdJson, parts: ImageParts, field: &str) -> Result<RgbdFra
     RgbdFrame::from_wire(
         color,
         depth,
-        CameraIntrinsics {
-            fx: k.fx,
-            fy: k.fy,
-            cx: k.cx,
-            cy: k.cy,
-        },
+        CameraIntrinsics::from_wire(k.fx, k.fy, k.cx, k.cy, &k.k, &format!("{field}.intrinsics"))?,
         f.depth_scale,
         camera_to_world,
         field,
