@@ -231,3 +231,106 @@ async fn an_expired_deadline_gets_deadline_exceeded_and_the_next_request_works()
     );
     assert_eq!(metric(&text, "graspd_plans_running", &[]), Some(0.0));
 }
+
+/// Hand imports, tactile analyses and calibrations use the planners' threads and queue: while a
+/// long plan holds the only place (`--max-concurrent-plans 1 --max-queued-plans 0`), each is shed
+/// like a plan — RESOURCE_EXHAUSTED with `retry-after-ms` (gRPC), 503 with `Retry-After` (REST)
+/// — and once the plan is done each works (issue 20).
+#[tokio::test(flavor = "multi_thread", worker_threads = 4)]
+async fn hand_imports_and_tactile_analyses_are_shed_like_plans() {
+    let server = Server::start_with(&["--max-concurrent-plans", "1", "--max-queued-plans", "0"]);
+    let grpc = server.grpc().await;
+    // About a second on the 2-core machine; what follows takes milliseconds.
+    let request = grpc_request_with_points(packed(&cylinder(2 * LARGE)), "shadow", 3);
+    let started = Instant::now();
+    let plan = tokio::spawn({
+        let mut client = grpc.clone();
+        async move { client.plan_grasp(request).await }
+    });
+    while metric(&server.metrics().await, "graspd_plans_running", &[]) != Some(1.0) {
+        assert!(
+            !plan.is_finished(),
+            "the plan ended before it was seen running"
+        );
+        tokio::time::sleep(Duration::from_millis(2)).await;
+    }
+
+    let urdf = r#"<robot name="pair">
+      <link name="base"><collision><geometry><box size="0.06 0.04 0.02"/></geometry></collision></link>
+      <link name="a"><collision><origin xyz="0 0 0.03"/><geometry><cylinder radius="0.008" length="0.06"/></geometry></collision></link>
+      <link name="b"><collision><origin xyz="0 0 0.03"/><geometry><cylinder radius="0.008" length="0.06"/></geometry></collision></link>
+      <joint name="ja" type="revolute"><parent link="base"/><child link="a"/>
+        <origin xyz="0.02 0 0.01"/><axis xyz="0 1 0"/><limit lower="-1.2" upper="0.3"/></joint>
+      <joint name="jb" type="revolute"><parent link="base"/><child link="b"/>
+        <origin xyz="-0.02 0 0.01"/><axis xyz="0 1 0"/><limit lower="-0.3" upper="1.2"/></joint>
+    </robot>"#;
+    let register = graspd_proto::v1::RegisterHandRequest {
+        name: "pair".into(),
+        model: Some(graspd_proto::v1::HandModel {
+            format: "urdf".into(),
+            text: urdf.into(),
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let register_json =
+        serde_json::json!({"name": "pair", "model": {"format": "urdf", "text": urdf}});
+    let reading = serde_json::json!({"pdc": 0.0, "pac": 0.0, "tdc": 0.0, "tac": 0.0,
+                                     "electrodes": vec![0.0; 19]});
+    let analyze_json = serde_json::json!({
+        "session": {"fingers": [{"name": "th", "layout": "biotac", "tare": {"pretared": true}}]},
+        "frames": [{"timestamp": 0.0, "fingers": [reading]}],
+    });
+
+    let status = grpc
+        .clone()
+        .register_hand(register.clone())
+        .await
+        .unwrap_err();
+    assert_eq!(status.code(), Code::ResourceExhausted, "{status:?}");
+    assert_eq!(status.metadata().get("retry-after-ms").unwrap(), "1000");
+    for (path, body) in [
+        ("/v1/hands", &register_json),
+        ("/v1/tactile/analyze", &analyze_json),
+    ] {
+        let response = http()
+            .post(server.rest_url(path))
+            .json(body)
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(
+            response
+                .headers()
+                .get("retry-after")
+                .map(|v| v.to_str().unwrap()),
+            Some("1"),
+            "{path}"
+        );
+        let (status, code, _, message) = rest_error(response).await;
+        assert_eq!(
+            (status, code.as_str()),
+            (503, "resource_exhausted"),
+            "{path}: {message}"
+        );
+        assert!(message.contains("max_queued_plans"), "{message}");
+    }
+    assert!(
+        !plan.is_finished(),
+        "the plan ended during the test ({:?}): make it longer",
+        started.elapsed()
+    );
+    assert!(plan.await.unwrap().is_ok());
+    eprintln!("the long plan took {:?}", started.elapsed());
+    let shed = metric(&server.metrics().await, "graspd_shed_requests_total", &[]).unwrap();
+    assert_eq!(shed, 3.0);
+
+    grpc.clone().register_hand(register).await.unwrap();
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze"))
+        .json(&analyze_json)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200, "{}", response.text().await.unwrap());
+}

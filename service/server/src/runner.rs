@@ -1,6 +1,6 @@
-//! Runs the facade's blocking, CPU-bound planning off the async runtime, at most
-//! `max_concurrent_plans` at a time with at most `max_queued_plans` waiting, and logs and counts
-//! each plan. Shared by both transports.
+//! Runs the facade's blocking, CPU-bound work — plans, hand imports, tactile analyses and
+//! calibrations — off the async runtime, at most `max_concurrent_plans` at a time with at most
+//! `max_queued_plans` waiting, and logs and counts each plan. Shared by both transports.
 //!
 //! A request that would wait beyond the queue is shed at once ([`ServiceError::Overloaded`]).
 //! A request whose caller gives up (its future is dropped: a passed deadline, a closed
@@ -66,18 +66,22 @@ impl PlanRunner {
         &self.metrics
     }
 
-    /// Plans on a blocking thread; `transport` labels the log line and the metrics.
-    pub async fn plan(
+    /// Runs CPU-bound work (`what`: a plan, a hand import, a tactile analysis or calibration)
+    /// on a blocking thread within the plans' limits — one pool for all of it, so a burst of
+    /// hand imports is shed like one of plans rather than starving the planners (issue 20).
+    /// `transport` labels the shedding metric.
+    pub async fn run_blocking<T: Send + 'static>(
         &self,
-        request: PlanRequest,
+        what: &'static str,
         transport: Transport,
-    ) -> Result<GraspPlan, ServiceError> {
+        work: impl FnOnce(GraspService) -> Result<T, ServiceError> + Send + 'static,
+    ) -> Result<T, ServiceError> {
         let limits = self.service.limits();
         let Ok(place) = self.places.clone().try_acquire_owned() else {
             self.metrics.shed(transport);
-            tracing::debug!(transport = transport.name(), "plan request shed");
+            tracing::debug!(transport = transport.name(), what, "request shed");
             return Err(ServiceError::Overloaded(format!(
-                "the planner is busy: {} plans are running and {} waiting (max_concurrent_plans, max_queued_plans); retry in {} s",
+                "the server is busy: {} CPU-bound requests (plans, hand imports, tactile analyses) are running and {} waiting (max_concurrent_plans, max_queued_plans); retry in {} s",
                 limits.max_concurrent_plans,
                 limits.max_queued_plans,
                 SHED_RETRY_AFTER.as_secs()
@@ -89,19 +93,34 @@ impl PlanRunner {
             .clone()
             .acquire_owned()
             .await
-            .map_err(|_| ServiceError::Internal("the planner pool is closed".into()))?;
+            .map_err(|_| ServiceError::Internal("the worker pool is closed".into()))?;
         drop(queued);
         let running = GaugeGuard::new(self.metrics.plans_running());
         let service = self.service.clone();
-        let started = Instant::now();
-        // The slot, the place and the gauge go with the thread: a plan whose caller has gone
-        // still occupies a planner until it ends.
-        let result = tokio::task::spawn_blocking(move || {
+        // The slot, the place and the gauge go with the thread: work whose caller has gone
+        // still occupies a worker until it ends.
+        tokio::task::spawn_blocking(move || {
             let _held = (permit, place, running);
-            service.plan(request)
+            work(service)
         })
         .await
-        .unwrap_or_else(|e| Err(ServiceError::Internal(format!("planning task failed: {e}"))));
+        .unwrap_or_else(|e| Err(ServiceError::Internal(format!("{what} task failed: {e}"))))
+    }
+
+    /// Plans on a blocking thread ([`Self::run_blocking`]); `transport` labels the log line and
+    /// the metrics.
+    pub async fn plan(
+        &self,
+        request: PlanRequest,
+        transport: Transport,
+    ) -> Result<GraspPlan, ServiceError> {
+        let started = Instant::now();
+        let result = self
+            .run_blocking("planning", transport, move |service| service.plan(request))
+            .await;
+        if matches!(result, Err(ServiceError::Overloaded(_))) {
+            return result;
+        }
         let seconds = started.elapsed().as_secs_f64();
         let transport_name = transport.name();
         match &result {

@@ -71,12 +71,13 @@ impl GraspPlanner for GraspPlannerService {
     ) -> Result<Response<pb::RegisterHandResponse>, Status> {
         let (upload, replace) = convert::register_request_from_proto(request.into_inner())
             .map_err(|e| to_status(e.into()))?;
-        let service = self.runner.service().clone();
-        let registered =
-            tokio::task::spawn_blocking(move || service.register_hand(upload, replace))
-                .await
-                .map_err(|e| Status::internal(format!("registration task failed: {e}")))?
-                .map_err(to_status)?;
+        let registered = self
+            .runner
+            .run_blocking("hand import", Transport::Grpc, move |s| {
+                s.register_hand(upload, replace)
+            })
+            .await
+            .map_err(to_status)?;
         tracing::info!(hand = %registered.description.name, persisted = registered.persisted, "hand registered");
         Ok(Response::new(convert::registered_to_proto(&registered)))
     }

@@ -84,7 +84,7 @@ pub async fn serve(
     let planner = GraspPlannerServer::new(grasp_planner::GraspPlannerService::new(runner.clone()))
         .max_decoding_message_size(limit);
     let tactile = TactileStabilizerServer::new(tactile_stabilizer::TactileStabilizerService::new(
-        runner.service().clone(),
+        runner.clone(),
     ))
     .max_decoding_message_size(limit);
     let (health_reporter, health) = tonic_health::server::health_reporter();

@@ -11,6 +11,8 @@
 use super::convert;
 use super::status::to_status;
 use crate::facade::{GraspService, ServiceError};
+use crate::ops::Transport;
+use crate::runner::PlanRunner;
 use graspd_core::FieldError;
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::tactile_stabilizer_server::TactileStabilizer;
@@ -27,11 +29,16 @@ pub const SESSION_QUEUE: usize = 16;
 #[derive(Debug, Clone)]
 pub struct TactileStabilizerService {
     service: GraspService,
+    /// The CPU-bound pool, for calibrations (shed like plans).
+    runner: PlanRunner,
 }
 
 impl TactileStabilizerService {
-    pub fn new(service: GraspService) -> Self {
-        Self { service }
+    pub fn new(runner: PlanRunner) -> Self {
+        Self {
+            service: runner.service().clone(),
+            runner,
+        }
     }
 }
 
@@ -103,10 +110,10 @@ impl TactileStabilizer for TactileStabilizerService {
     ) -> Result<Response<pb::CalibrationInfo>, Status> {
         let upload =
             convert::calibrate_request_from_proto(request.into_inner()).map_err(invalid)?;
-        let service = self.service.clone();
-        let info = tokio::task::spawn_blocking(move || service.calibrate(upload))
+        let info = self
+            .runner
+            .run_blocking("calibration", Transport::Grpc, move |s| s.calibrate(upload))
             .await
-            .map_err(|e| Status::internal(format!("calibration task failed: {e}")))?
             .map_err(to_status)?;
         tracing::info!(calibration = %info.calibration.name, persisted = info.persisted, "calibration fitted");
         Ok(Response::new(convert::calibration_info_to_proto(&info)))

@@ -154,7 +154,7 @@ impl Metrics {
         let shed = Family::<TransportLabels, Counter>::default();
         registry.register(
             "shed_requests",
-            "Plan requests refused because max_concurrent_plans were running and max_queued_plans waiting, by transport",
+            "CPU-bound requests (plans, hand imports, tactile analyses, calibrations) refused because max_concurrent_plans were running and max_queued_plans waiting, by transport",
             shed.clone(),
         );
         let plans = Family::<PlanLabels, Counter>::default();
@@ -180,13 +180,13 @@ impl Metrics {
         let plans_running = Gauge::default();
         registry.register(
             "plans_running",
-            "Plans being computed (at most max_concurrent_plans), including those whose caller has gone",
+            "CPU-bound requests being computed (plans, hand imports, tactile analyses, calibrations; at most max_concurrent_plans), including those whose caller has gone",
             plans_running.clone(),
         );
         let plans_queued = Gauge::default();
         registry.register(
             "plans_queued",
-            "Plan requests waiting for a planner (at most max_queued_plans)",
+            "CPU-bound requests waiting for a worker (at most max_queued_plans)",
             plans_queued.clone(),
         );
         let tactile_sessions = Gauge::default();

@@ -5,6 +5,7 @@ use super::body::{Body, read_body};
 use super::error::ApiError;
 use super::json::{self, CalibrateJson, CalibrationJson, CalibrationsJson, ErrorJson};
 use crate::facade::ServiceError;
+use crate::ops::Transport;
 use crate::runner::PlanRunner;
 use axum::Json;
 use axum::extract::{Path, Request, State};
@@ -41,14 +42,11 @@ pub async fn calibrate(
             ));
         }
     };
-    let service = runner.service().clone();
-    let info = tokio::task::spawn_blocking(move || service.calibrate(body.into()))
-        .await
-        .unwrap_or_else(|e| {
-            Err(ServiceError::Internal(format!(
-                "calibration task failed: {e}"
-            )))
-        })?;
+    let info = runner
+        .run_blocking("calibration", Transport::Rest, move |s| {
+            s.calibrate(body.into())
+        })
+        .await?;
     tracing::info!(calibration = %info.calibration.name, persisted = info.persisted, "calibration fitted");
     Ok((StatusCode::CREATED, Json((&info).into())))
 }

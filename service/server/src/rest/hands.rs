@@ -4,6 +4,7 @@ use super::body::{Body, Part, read_body};
 use super::error::ApiError;
 use super::json::{self, ErrorJson, HandJson, HandsJson, RegisterHandJson, RegisteredHandJson};
 use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
+use crate::ops::Transport;
 use crate::runner::PlanRunner;
 use axum::Json;
 use axum::extract::{Path, Request, State};
@@ -93,16 +94,11 @@ pub async fn register(
             json::register_request_from_json(body)?
         }
     };
-    let service = runner.service().clone();
-    let registered = tokio::task::spawn_blocking(move || service.register_hand(upload, replace))
-        .await
-        .map_err(|e| {
-            ApiError::new(
-                StatusCode::INTERNAL_SERVER_ERROR,
-                "internal",
-                format!("registration task failed: {e}"),
-            )
-        })??;
+    let registered = runner
+        .run_blocking("hand import", Transport::Rest, move |s| {
+            s.register_hand(upload, replace)
+        })
+        .await?;
     tracing::info!(hand = %registered.description.name, persisted = registered.persisted, "hand registered");
     Ok((StatusCode::CREATED, Json(registered.into())))
 }

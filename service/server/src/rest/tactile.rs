@@ -16,7 +16,8 @@
 use super::body::{Body, Part, read_body};
 use super::error::ApiError;
 use super::json::{self, AnalyzeCsvQuery, AnalyzeRequestJson, AnalyzeResponseJson, ErrorJson};
-use crate::facade::{ServiceError, TactileSessionRequest};
+use crate::facade::TactileSessionRequest;
+use crate::ops::Transport;
 use crate::runner::PlanRunner;
 use axum::Json;
 use axum::extract::{Query, Request, State};
@@ -80,10 +81,11 @@ pub async fn analyze(
             )
         }
     };
-    let service = runner.service().clone();
-    let results = tokio::task::spawn_blocking(move || service.analyze_tactile(session, &frames))
-        .await
-        .unwrap_or_else(|e| Err(ServiceError::Internal(format!("analyze task failed: {e}"))))?;
+    let results = runner
+        .run_blocking("tactile analysis", Transport::Rest, move |s| {
+            s.analyze_tactile(session, &frames)
+        })
+        .await?;
     Ok(Json(AnalyzeResponseJson {
         frame_count: results.len(),
         frames: results,
