@@ -467,6 +467,53 @@ mod websocket {
         }]}})
     }
 
+    /// A WebSocket session's log lines carry its upgrade request's id, like every request's
+    /// (issue 20): opened, closed, and a refused message.
+    #[tokio::test]
+    async fn websocket_sessions_log_with_their_request_id() {
+        use tokio_tungstenite::tungstenite::client::IntoClientRequest;
+        let server = Server::start_with_logs(&["--log", "debug", "--log-format", "json"]);
+        let mut request = format!("ws://{}/v1/stabilize", server.rest_addr)
+            .into_client_request()
+            .unwrap();
+        request
+            .headers_mut()
+            .insert("x-request-id", "ws-session-9".parse().unwrap());
+        let (mut ws, response) = tokio_tungstenite::connect_async(request).await.unwrap();
+        assert_eq!(response.headers()["x-request-id"], "ws-session-9");
+        send(&mut ws, serde_json::json!({"session": session_json()})).await;
+        let frames = recording_frames();
+        send(&mut ws, frame_json(&frames[0])).await;
+        next_json(&mut ws).await;
+        send(&mut ws, serde_json::json!({"frame": {"timestamp": -1.0}})).await;
+        assert!(next_json(&mut ws).await["error"].is_object());
+        let logged = |message: &str| {
+            server.logs().iter().any(|line| {
+                serde_json::from_str::<serde_json::Value>(line).is_ok_and(|v| {
+                    v["fields"]["message"] == message && v["span"]["request_id"] == "ws-session-9"
+                })
+            })
+        };
+        let expected = [
+            "tactile session opened",
+            "tactile session refused a message",
+            "tactile session closed",
+        ];
+        for _ in 0..100 {
+            if expected.iter().all(|m| logged(m)) {
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+        for m in expected {
+            assert!(
+                logged(m),
+                "no {m:?} line with the request id:\n{:#?}",
+                server.logs()
+            );
+        }
+    }
+
     #[tokio::test]
     async fn websocket_session_replays_a_real_recording_like_analyze() {
         let server = Server::start();

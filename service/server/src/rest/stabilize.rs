@@ -21,6 +21,7 @@ use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade, close_
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use graspd_core::FieldError;
+use tracing::Instrument;
 
 #[utoipa::path(
     get,
@@ -54,11 +55,15 @@ pub async fn stabilize(
     };
     let limit = runner.service().limits().max_message_bytes;
     let service = runner.service().clone();
+    // The session outlives this handler on its own task: it keeps the request's span, so its
+    // log lines carry the request id like every other request's.
+    let span = tracing::Span::current();
     ws.max_message_size(limit)
-        .on_upgrade(move |socket| run(socket, service))
+        .on_upgrade(move |socket| run(socket, service).instrument(span))
 }
 
 async fn run(mut socket: WebSocket, service: GraspService) {
+    tracing::debug!("tactile WebSocket opened");
     let mut session: Option<TactileSession> = None;
     while let Some(Ok(message)) = socket.recv().await {
         let answer = match &message {
@@ -75,6 +80,12 @@ async fn run(mut socket: WebSocket, service: GraspService) {
                 }
             }
             Err(e) => {
+                tracing::info!(
+                    code = e.code,
+                    field = e.field.as_deref().unwrap_or(""),
+                    error = %e.message,
+                    "tactile session refused a message"
+                );
                 let code = if e.status == StatusCode::SERVICE_UNAVAILABLE {
                     close_code::AGAIN
                 } else {
@@ -108,6 +119,10 @@ async fn run(mut socket: WebSocket, service: GraspService) {
             }
         }
     }
+    tracing::debug!(
+        frames = session.as_ref().map_or(0, TactileSession::frames),
+        "tactile session closed"
+    );
     drop(session);
 }
 
@@ -123,7 +138,12 @@ fn handle(
             Err(FieldError::new("message", "give either session or frame, not both").into())
         }
         (None, Some(s), None) => {
-            *session = Some(service.open_tactile_session(json::tactile_session_from_json(s))?);
+            let opened = service.open_tactile_session(json::tactile_session_from_json(s))?;
+            tracing::debug!(
+                fingers = opened.config().fingers.len(),
+                "tactile session opened"
+            );
+            *session = Some(opened);
             Ok(None)
         }
         (None, None, _) => Err(FieldError::new(
