@@ -5,7 +5,7 @@ use crate::config::Settings;
 use crate::facade::GraspService;
 use crate::ops::{Ops, ReadyState};
 use crate::runner::PlanRunner;
-use crate::tls::{Tls, TlsError};
+use crate::tls::{Listening, Tls, TlsError};
 use crate::{grpc, rest};
 use graspd_core::onnx_runtime::init_onnx_runtime;
 use graspd_core::perception::GraspTypeModel;
@@ -177,16 +177,21 @@ pub async fn run(
     // Hands and models are loaded and both ports bound: ready (the servers, spawned next, start
     // from this state, so the first probe already sees it).
     ops.readiness.set(ReadyState::Ready);
+    let grpc_listening = Listening::new(grpc_listener, tls.as_ref().map(|t| t.grpc.clone()))
+        .map_err(ServeError::Announce)?;
+    let rest_listening = Listening::new(rest_listener, tls.as_ref().map(|t| t.rest.clone()))
+        .map_err(ServeError::Announce)?;
+    if let Some(t) = &tls {
+        t.watch();
+    }
     let mut grpc_task = tokio::spawn(grpc::serve(
-        grpc_listener,
-        tls.as_ref().map(|t| t.grpc.clone()),
+        grpc_listening,
         runner.clone(),
         ops.clone(),
         wait(stopped.clone()),
     ));
     let mut rest_task = tokio::spawn(rest::serve(
-        rest_listener,
-        tls.as_ref().map(|t| t.rest.clone()),
+        rest_listening,
         runner,
         ops.clone(),
         wait(stopped),

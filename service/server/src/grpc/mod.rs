@@ -8,13 +8,13 @@ pub mod tactile_stabilizer;
 use crate::ops::edge::{EdgeHooks, EdgeLayer};
 use crate::ops::{Ops, ReadyState, Transport};
 use crate::runner::PlanRunner;
+use crate::tls::Listening;
 use graspd_proto::v1::grasp_planner_server::GraspPlannerServer;
 use graspd_proto::v1::tactile_stabilizer_server::TactileStabilizerServer;
 use std::borrow::Cow;
 use std::future::Future;
-use tokio::net::TcpListener;
+use tonic::transport::Server;
 use tonic::transport::server::TcpIncoming;
-use tonic::transport::{Server, ServerTlsConfig};
 use tonic_health::ServingStatus;
 
 /// The methods served, as the metrics label them; any other path is labelled `other`.
@@ -74,8 +74,7 @@ async fn mirror_readiness(reporter: &tonic_health::server::HealthReporter, state
 /// `tls`) until `shutdown` completes, then drains in-flight calls. The health service follows the readiness: SERVING
 /// while ready, NOT_SERVING while draining.
 pub async fn serve(
-    listener: TcpListener,
-    tls: Option<ServerTlsConfig>,
+    listening: Listening,
     runner: PlanRunner,
     ops: Ops,
     shutdown: impl Future<Output = ()> + Send,
@@ -101,11 +100,7 @@ pub async fn serve(
         .register_encoded_file_descriptor_set(graspd_proto::FILE_DESCRIPTOR_SET)
         .build_v1()
         .expect("the embedded descriptor set is valid");
-    let mut builder = Server::builder();
-    if let Some(tls) = tls {
-        builder = builder.tls_config(tls)?;
-    }
-    builder
+    let router = Server::builder()
         .layer(EdgeLayer::new(EDGE_HOOKS, &ops))
         .layer(tower::util::MapResponseLayer::new(move |r| {
             status::rewrite_too_large(r, limit)
@@ -113,14 +108,24 @@ pub async fn serve(
         .add_service(health)
         .add_service(reflection)
         .add_service(planner)
-        .add_service(tactile)
-        // No Nagle: a small answer must not wait for the peer's delayed ACK (40 ms per call on
-        // loopback without this; REST's axum sets it by default).
-        .serve_with_incoming_shutdown(
-            TcpIncoming::from(listener).with_nodelay(Some(true)),
-            shutdown,
-        )
-        .await
+        .add_service(tactile);
+    // No Nagle: a small answer must not wait for the peer's delayed ACK (40 ms per call on
+    // loopback without this; REST's axum sets it by default; the TLS listener sets it too).
+    match listening {
+        Listening::Plain(listener) => {
+            router
+                .serve_with_incoming_shutdown(
+                    TcpIncoming::from(listener).with_nodelay(Some(true)),
+                    shutdown,
+                )
+                .await
+        }
+        Listening::Tls(listener) => {
+            router
+                .serve_with_incoming_shutdown(listener.into_stream(), shutdown)
+                .await
+        }
+    }
 }
 
 #[cfg(test)]

@@ -15,7 +15,7 @@ pub mod tactile;
 use crate::ops::edge::{EdgeHooks, EdgeLayer};
 use crate::ops::{Ops, Transport, metrics};
 use crate::runner::PlanRunner;
-use crate::tls::TlsListener;
+use crate::tls::Listening;
 use axum::extract::{DefaultBodyLimit, FromRef, MatchedPath, State};
 use axum::http::header::CONTENT_TYPE;
 use axum::http::{HeaderMap, Method, StatusCode, Uri};
@@ -26,10 +26,7 @@ use error::ApiError;
 use serde_json::{Value, json};
 use std::borrow::Cow;
 use std::future::Future;
-use std::sync::Arc;
 use std::time::Duration;
-use tokio::net::TcpListener;
-use tokio_rustls::rustls::ServerConfig;
 
 /// The optional request header giving the caller's time budget, milliseconds.
 pub const REQUEST_TIMEOUT_HEADER: &str = "x-request-timeout-ms";
@@ -78,21 +75,20 @@ pub fn router(runner: PlanRunner, ops: Ops) -> Router {
 /// Serves the routes on `listener` until `shutdown` completes, then drains open requests.
 /// With `tls`, serves HTTPS (handshakes in [`TlsListener`]); WebSocket upgrades work the same.
 pub async fn serve(
-    listener: TcpListener,
-    tls: Option<Arc<ServerConfig>>,
+    listening: Listening,
     runner: PlanRunner,
     ops: Ops,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
     let app = router(runner, ops);
-    match tls {
-        None => {
+    match listening {
+        Listening::Plain(listener) => {
             axum::serve(listener, app)
                 .with_graceful_shutdown(shutdown)
                 .await
         }
-        Some(config) => {
-            axum::serve(TlsListener::new(listener, config)?, app)
+        Listening::Tls(listener) => {
+            axum::serve(listener, app)
                 .with_graceful_shutdown(shutdown)
                 .await
         }
