@@ -51,6 +51,8 @@ pub struct Server {
     child: Child,
     pub grpc_addr: SocketAddr,
     pub rest_addr: SocketAddr,
+    /// The plain-HTTP probe port, when started with `--probe-addr`.
+    pub probe_addr: Option<SocketAddr>,
     /// Its log lines (stderr), when started with [`Server::start_with_logs`].
     logs: Option<Arc<Mutex<Vec<String>>>>,
 }
@@ -156,6 +158,10 @@ impl Server {
         Server {
             grpc_addr: addr("grpc="),
             rest_addr: addr("rest="),
+            probe_addr: line
+                .split_whitespace()
+                .find_map(|w| w.strip_prefix("probe="))
+                .and_then(|a| a.parse().ok()),
             child,
             logs,
         }

@@ -208,7 +208,8 @@ async fn graspd_starts_from_the_assembled_image_and_passes_its_healthcheck() {
     // config file, as in `docker run -e`).
     command
         .env("GRASPD_GRPC_ADDR", "127.0.0.1:0")
-        .env("GRASPD_REST_ADDR", "127.0.0.1:0");
+        .env("GRASPD_REST_ADDR", "127.0.0.1:0")
+        .env("GRASPD_PROBE_ADDR", "127.0.0.1:0");
     // A grasp-type model (the contract's smallest: a 1×1 convolution) proves that the image's
     // ONNX Runtime loads.
     let model = root.join("model.onnx");
@@ -240,12 +241,14 @@ async fn graspd_starts_from_the_assembled_image_and_passes_its_healthcheck() {
             );
         }
     };
-    let rest = line
-        .split_whitespace()
-        .find_map(|w| w.strip_prefix("rest="))
-        .unwrap()
-        .to_string();
-    let port = rest.rsplit(':').next().unwrap();
+    let field = |key: &str| {
+        line.split_whitespace()
+            .find_map(|w| w.strip_prefix(key))
+            .unwrap_or_else(|| panic!("no {key} in {line}"))
+            .to_string()
+    };
+    let rest = field("rest=");
+    let probe = field("probe=");
 
     let ready = http()
         .get(format!("http://{rest}/readyz"))
@@ -262,24 +265,37 @@ async fn graspd_starts_from_the_assembled_image_and_passes_its_healthcheck() {
         .unwrap();
     assert_eq!(plan.status(), 200);
 
-    // The image's HEALTHCHECK, pointed at this port.
-    let mut health = image.healthcheck.clone();
-    for arg in &mut health {
-        *arg = arg.replace("127.0.0.1/8080", &format!("127.0.0.1/{port}"));
-    }
-    let status = Command::new(&health[0])
-        .args(&health[1..])
-        .status()
-        .expect("run the HEALTHCHECK command");
-    assert!(status.success(), "HEALTHCHECK failed: {health:?}");
+    // The image's HEALTHCHECK, run as Docker runs it: in the container's environment (here with
+    // this run's probe port in place of the image's fixed one).
+    let health = |command: &mut Command| {
+        command
+            .env_clear()
+            .current_dir(under(&root, &image.workdir))
+            .stdin(Stdio::null())
+            .stderr(Stdio::null());
+        for (k, v) in &image.env {
+            command.env(k, rooted(&image, v));
+        }
+        command
+            .env("GRASPD_PROBE_ADDR", &probe)
+            .status()
+            .expect("run the HEALTHCHECK command")
+            .success()
+    };
+    let check = &image.healthcheck;
+    assert_eq!(check[1..], ["--probe"], "{check:?}");
+    let mut command = Command::new(rooted(&image, &check[0]));
+    assert!(
+        health(command.args(&check[1..])),
+        "HEALTHCHECK failed: {check:?}"
+    );
     child.kill().unwrap();
     child.wait().unwrap();
     // A closed port fails it.
-    let status = Command::new(&health[0])
-        .args(&health[1..])
-        .stderr(Stdio::null())
-        .status()
-        .unwrap();
-    assert!(!status.success(), "HEALTHCHECK passes with graspd stopped");
+    let mut command = Command::new(rooted(&image, &check[0]));
+    assert!(
+        !health(command.args(&check[1..])),
+        "HEALTHCHECK passes with graspd stopped"
+    );
     let _ = std::fs::remove_dir_all(&root);
 }

@@ -512,3 +512,73 @@ async fn certificates_reload_on_sighup_and_on_file_change_without_dropping_conne
             .is_err()
     );
 }
+
+/// `graspd --probe` with the server's own configuration: 0 while it is ready, 1 once it is gone.
+fn probe(args: &[&str]) -> bool {
+    Command::new(binary("graspd", "GRASPD_BIN"))
+        .arg("--probe")
+        .args(args)
+        .env_remove("GRASPD_CONFIG")
+        .stderr(std::process::Stdio::null())
+        .status()
+        .unwrap()
+        .success()
+}
+
+/// Probes with TLS on (issue 20): the container HEALTHCHECK (`graspd --probe`) speaks the REST
+/// port's TLS; with mutual TLS, which no probe can pass, the plain-HTTP probe port
+/// (`--probe-addr`) answers /healthz and /readyz only.
+#[tokio::test]
+async fn probes_work_with_tls_and_with_mutual_tls_through_the_probe_port() {
+    let pki = Pki::new("probe");
+    let (cert, key, ca) = (
+        pki.path("server.pem"),
+        pki.path("server.key"),
+        pki.path("ca.pem"),
+    );
+    let server = pki.start(&[]);
+    let rest = server.rest_addr.to_string();
+    let tls_args = ["--tls-cert", cert.as_str(), "--tls-key", key.as_str()];
+    let with = |extra: &[&str]| -> Vec<String> {
+        tls_args
+            .iter()
+            .chain(extra)
+            .map(|s| s.to_string())
+            .collect()
+    };
+    let args = with(&["--rest-addr", &rest]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    assert!(probe(&args), "HEALTHCHECK over TLS");
+    assert!(!probe(&["--rest-addr", &rest]), "plain HTTP to a TLS port");
+    drop(server);
+    assert!(!probe(&args), "the probe passes with graspd stopped");
+
+    let server = pki.start(&["--tls-client-ca", &ca, "--probe-addr", "127.0.0.1:0"]);
+    let probe_addr = server
+        .probe_addr
+        .expect("probe= in the listening line")
+        .to_string();
+    let plain = reqwest::Client::new();
+    for (path, status) in [
+        ("/readyz", 200),
+        ("/healthz", 200),
+        ("/v1/hands", 404),
+        ("/metrics", 404),
+    ] {
+        let response = plain
+            .get(format!("http://{probe_addr}{path}"))
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(response.status().as_u16(), status, "{path}");
+    }
+    let rest = server.rest_addr.to_string();
+    let mutual = with(&["--tls-client-ca", &ca, "--rest-addr", &rest]);
+    let mut mutual: Vec<&str> = mutual.iter().map(String::as_str).collect();
+    assert!(
+        !probe(&mutual),
+        "no client certificate, no answer on the REST port"
+    );
+    mutual.extend(["--probe-addr", &probe_addr]);
+    assert!(probe(&mutual), "HEALTHCHECK through the probe port");
+}

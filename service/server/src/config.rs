@@ -30,6 +30,15 @@ pub struct Cli {
     /// REST listen address [default: 0.0.0.0:8080].
     #[arg(long, env = "GRASPD_REST_ADDR", value_name = "ADDR")]
     pub rest_addr: Option<SocketAddr>,
+    /// A plain-HTTP port answering only GET /healthz and /readyz (no TLS, no token): probes
+    /// that cannot speak the TLS of the other ports, e.g. with mutual TLS [default: none].
+    #[arg(long, env = "GRASPD_PROBE_ADDR", value_name = "ADDR")]
+    pub probe_addr: Option<SocketAddr>,
+    /// Instead of serving: ask the server this configuration describes whether it is ready
+    /// (its probe port, else its REST port, over TLS when configured, the certificate not
+    /// verified: a container HEALTHCHECK). Exit 0 when /readyz answers 200.
+    #[arg(long)]
+    pub probe: bool,
     /// Largest gRPC message / REST body, bytes; accepts KiB/MiB/GiB suffixes [default: 32MiB].
     #[arg(long, env = "GRASPD_MAX_MESSAGE_BYTES", value_name = "BYTES", value_parser = parse_bytes)]
     pub max_message_bytes: Option<usize>,
@@ -143,6 +152,7 @@ pub enum LogFormat {
 pub struct FileConfig {
     pub grpc_addr: Option<SocketAddr>,
     pub rest_addr: Option<SocketAddr>,
+    pub probe_addr: Option<SocketAddr>,
     pub max_message_bytes: Option<usize>,
     pub max_points: Option<usize>,
     pub max_concurrent_plans: Option<usize>,
@@ -177,6 +187,9 @@ pub struct FileConfig {
 pub struct Settings {
     pub grpc_addr: SocketAddr,
     pub rest_addr: SocketAddr,
+    /// The plain-HTTP probe port, if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub probe_addr: Option<SocketAddr>,
     pub max_message_bytes: usize,
     pub max_points: usize,
     pub max_concurrent_plans: usize,
@@ -288,6 +301,7 @@ impl Settings {
                 .rest_addr
                 .or(file.rest_addr)
                 .unwrap_or(([0, 0, 0, 0], 8080).into()),
+            probe_addr: cli.probe_addr.or(file.probe_addr),
             max_message_bytes: cli
                 .max_message_bytes
                 .or(file.max_message_bytes)

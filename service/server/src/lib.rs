@@ -8,6 +8,7 @@ pub mod facade;
 pub mod grpc;
 pub mod hand_store;
 pub mod ops;
+pub mod probe;
 pub mod rest;
 pub mod runner;
 pub mod server;

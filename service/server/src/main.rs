@@ -14,6 +14,15 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if cli.probe {
+        return match graspd::probe::probe(&settings) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("graspd: not ready: {e}");
+                ExitCode::FAILURE
+            }
+        };
+    }
     if cli.print_config {
         match toml::to_string(&settings) {
             Ok(text) => {

@@ -190,6 +190,21 @@ pub async fn run(
         ops.clone(),
         wait(stopped.clone()),
     ));
+    let probe_addr = match settings.probe_addr {
+        None => None,
+        Some(addr) => {
+            let listener = bind("probe", addr).await?;
+            let local = listener.local_addr().map_err(ServeError::Announce)?;
+            let wait = wait(stopped.clone());
+            let ops = ops.clone();
+            tokio::spawn(async move {
+                if let Err(e) = rest::serve_probes(listener, ops, wait).await {
+                    tracing::error!(error = %e, "the probe port stopped");
+                }
+            });
+            Some(local)
+        }
+    };
     let mut rest_task = tokio::spawn(rest::serve(
         rest_listening,
         runner,
@@ -199,13 +214,18 @@ pub async fn run(
 
     {
         let mut out = std::io::stdout().lock();
-        writeln!(out, "graspd listening grpc={grpc_addr} rest={rest_addr}")
-            .and_then(|()| out.flush())
-            .map_err(ServeError::Announce)?;
+        let probe = probe_addr.map_or(String::new(), |a| format!(" probe={a}"));
+        writeln!(
+            out,
+            "graspd listening grpc={grpc_addr} rest={rest_addr}{probe}"
+        )
+        .and_then(|()| out.flush())
+        .map_err(ServeError::Announce)?;
     }
     tracing::info!(
         %grpc_addr,
         %rest_addr,
+        probe_addr = probe_addr.map(|a| a.to_string()),
         max_message_bytes = settings.max_message_bytes,
         max_points = settings.max_points,
         max_concurrent_plans = settings.max_concurrent_plans,

@@ -173,13 +173,40 @@ async fn health() -> Json<Value> {
     )
 )]
 async fn ready(State(state): State<AppState>) -> Response {
-    let readiness = state.ops.readiness.state();
-    let status = if state.ops.readiness.is_ready() {
+    readiness(&state.ops)
+}
+
+/// The readiness answer of `/readyz` on both the REST and the probe port.
+fn readiness(ops: &Ops) -> Response {
+    let status = if ops.readiness.is_ready() {
         StatusCode::OK
     } else {
         StatusCode::SERVICE_UNAVAILABLE
     };
-    (status, Json(json!({"status": readiness.name()}))).into_response()
+    (
+        status,
+        Json(json!({"status": ops.readiness.state().name()})),
+    )
+        .into_response()
+}
+
+/// The probe port (`--probe-addr`): plain HTTP, `GET /healthz` and `/readyz` only, no token —
+/// for probes that cannot speak the other ports' TLS (a kubelet with mutual TLS on).
+pub async fn serve_probes(
+    listener: tokio::net::TcpListener,
+    ops: Ops,
+    shutdown: impl Future<Output = ()> + Send + 'static,
+) -> std::io::Result<()> {
+    let app = Router::new()
+        .route("/healthz", get(health))
+        .route(
+            "/readyz",
+            get(|State(ops): State<Ops>| async move { readiness(&ops) }),
+        )
+        .with_state(ops);
+    axum::serve(listener, app)
+        .with_graceful_shutdown(shutdown)
+        .await
 }
 
 /// The Prometheus exposition (OpenMetrics text).
