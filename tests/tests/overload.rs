@@ -334,3 +334,60 @@ async fn hand_imports_and_tactile_analyses_are_shed_like_plans() {
         .unwrap();
     assert_eq!(response.status(), 200, "{}", response.text().await.unwrap());
 }
+
+/// Writes a large POST over HTTP/1.1 in chunks, as a client that sends its whole body before
+/// reading; returns the status line it then reads (or the write or read error).
+fn post_whole_body(
+    addr: std::net::SocketAddr,
+    headers: &str,
+    len: usize,
+) -> Result<String, String> {
+    use std::io::{BufRead, BufReader, Write};
+    let mut s = std::net::TcpStream::connect(addr).map_err(|e| e.to_string())?;
+    s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+    s.set_write_timeout(Some(Duration::from_secs(30))).unwrap();
+    write!(
+        s,
+        "POST /v1/plan HTTP/1.1\r\nhost: localhost\r\ncontent-type: application/json\r\n\
+         content-length: {len}\r\n{headers}\r\n"
+    )
+    .map_err(|e| e.to_string())?;
+    let chunk = vec![b' '; 64 * 1024];
+    let mut sent = 0;
+    while sent < len {
+        let n = chunk.len().min(len - sent);
+        s.write_all(&chunk[..n])
+            .map_err(|e| format!("writing the body at byte {sent}: {e}"))?;
+        sent += n;
+    }
+    let mut line = String::new();
+    BufReader::new(s)
+        .read_line(&mut line)
+        .map_err(|e| format!("reading the answer: {e}"))?;
+    Ok(line.trim_end().to_string())
+}
+
+/// An answer decided before the body is read — a deadline already passed, a missing token —
+/// still reaches an HTTP/1.1 client that writes its whole (large) body first: graspd reads and
+/// drops the rest of the body (up to max_message_bytes) before answering, instead of closing
+/// the connection under the client's writes (EPIPE) (issue 20).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn answers_decided_early_reach_a_client_still_writing_its_body() {
+    let server = Server::start_with(&["--auth-token", "secret-token"]);
+    let addr = server.rest_addr;
+    let len = 16 << 20;
+    let cases = [
+        (
+            "authorization: Bearer secret-token\r\nx-request-timeout-ms: 1\r\n",
+            "504",
+        ),
+        ("", "401"),
+    ];
+    for (headers, status) in cases {
+        let line = tokio::task::spawn_blocking(move || post_whole_body(addr, headers, len))
+            .await
+            .unwrap();
+        let line = line.unwrap_or_else(|e| panic!("{status}: {e}"));
+        assert!(line.starts_with(&format!("HTTP/1.1 {status}")), "{line}");
+    }
+}

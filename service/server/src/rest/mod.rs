@@ -3,6 +3,7 @@
 
 pub mod body;
 pub mod calibrations;
+mod drain;
 pub mod error;
 pub mod hands;
 pub mod json;
@@ -69,6 +70,7 @@ pub fn router(runner: PlanRunner, ops: Ops) -> Router {
         .fallback(not_found)
         .layer(DefaultBodyLimit::max(limit))
         .layer(edge)
+        .layer(drain::DrainLayer::new(limit))
         .with_state(AppState { runner, ops })
 }
 
