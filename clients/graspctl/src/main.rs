@@ -103,6 +103,10 @@ struct PlanArgs {
     /// Write the overlay (ROI, attention point, heat map, contacts, opposition) to this PNG.
     #[arg(long, value_name = "FILE", requires = "rgb")]
     overlay: Option<PathBuf>,
+    /// Write the plan as a binary glTF scene (points, support plane, contacts, opposition, the
+    /// hand posed at the pre-grasp, grasp and squeeze) to this file; any glTF viewer opens it.
+    #[arg(long, value_name = "FILE")]
+    glb: Option<PathBuf>,
     /// A hand of the server (see `graspctl hands`).
     #[arg(
         long,
@@ -340,6 +344,7 @@ fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
         },
         output: OutputOptions {
             overlay: args.overlay.is_some(),
+            scene_glb: args.glb.is_some(),
             ..OutputOptions::default()
         },
     })
@@ -365,6 +370,16 @@ async fn run(cli: Cli) -> Result<(), CliError> {
                     .and_then(|p| p.overlay_png.as_deref())
                     .ok_or_else(|| CliError::Answer(FieldError::new("overlay_png", "missing")))?;
                 std::fs::write(path, png).map_err(|source| CliError::Write {
+                    path: path.clone(),
+                    source,
+                })?;
+            }
+            if let Some(path) = &args.glb {
+                let glb = plan
+                    .scene_glb
+                    .as_deref()
+                    .ok_or_else(|| CliError::Answer(FieldError::new("scene_glb", "missing")))?;
+                std::fs::write(path, glb).map_err(|source| CliError::Write {
                     path: path.clone(),
                     source,
                 })?;

@@ -9,6 +9,7 @@ pub mod hand;
 pub mod onnx_runtime;
 pub mod perception;
 pub mod plan_overlay;
+pub mod plan_scene;
 pub mod planning;
 pub mod tactile;
 

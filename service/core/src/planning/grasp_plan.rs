@@ -242,4 +242,7 @@ pub struct GraspPlan {
     /// ([`super::moveit_grasp`]).
     #[serde(default)]
     pub moveit_grasps: Vec<super::moveit_grasp::MoveItGrasp>,
+    /// The plan as a binary glTF scene, when asked for (`crate::plan_scene`).
+    #[serde(skip)]
+    pub scene_glb: Option<Vec<u8>>,
 }

@@ -144,6 +144,7 @@ pub(super) fn assemble(
         warnings,
         perception: None,
         moveit_grasps: Vec::new(),
+        scene_glb: None,
     })
 }
 
@@ -379,6 +380,7 @@ fn plan_of_final(
         warnings,
         perception: None,
         moveit_grasps: Vec::new(),
+        scene_glb: None,
     })
 }
 

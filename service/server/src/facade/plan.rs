@@ -10,6 +10,7 @@ use graspd_core::perception::{
     fuse_views, grasp_information,
 };
 use graspd_core::plan_overlay::draw_overlay;
+use graspd_core::plan_scene::{plan_scene, to_glb};
 use graspd_core::planning::PlaneSource;
 use graspd_core::planning::moveit_grasp::moveit_grasps;
 use graspd_core::{FieldError, GraspPlan, HandDescription, PlanHints, PlanInput};
@@ -59,8 +60,15 @@ impl GraspService {
     pub fn plan(&self, request: PlanRequest) -> Result<GraspPlan, ServiceError> {
         let output = request.output.clone();
         let (input, perceived) = self.prepare_with_perception(request)?;
+        // What the scene draws besides the plan: the points planned on and the hand's model.
+        let scene = output
+            .scene_glb
+            .then(|| (input.cloud.points.clone(), input.kinematics.clone()));
         guarded("the planner", || {
             let mut plan = graspd_core::plan(input).map_err(ServiceError::from)?;
+            if let Some((points, kinematics)) = &scene {
+                plan.scene_glb = Some(to_glb(&plan_scene(points, &plan, kinematics.as_deref())));
+            }
             if let Some(p) = perceived {
                 p.attach(&mut plan, &output);
             }

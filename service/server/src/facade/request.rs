@@ -91,6 +91,8 @@ pub struct OutputOptions {
     pub moveit_grasps: bool,
     /// The frame the plan is in, for the MoveIt grasps' headers ([`Self::in_frame`]).
     pub frame_id: String,
+    /// Return the plan as a binary glTF scene (`graspd_core::plan_scene`).
+    pub scene_glb: bool,
 }
 
 impl OutputOptions {

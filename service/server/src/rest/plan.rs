@@ -3,7 +3,8 @@
 //! `request` part holding the same JSON without the file's data.
 //!
 //! `?format=png` answers with the overlay image (`image/png`) instead of the JSON plan (RGB-D
-//! input only); `?format=json` is the default.
+//! input only), `?format=glb` with the plan as a binary glTF scene (`model/gltf-binary`,
+//! `graspd_core::plan_scene`); `?format=json` is the default.
 
 use super::body::{Body, Part, after_reading_body, read_body};
 use super::error::ApiError;
@@ -24,7 +25,7 @@ use serde::Deserialize;
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlanQuery {
-    /// `json` (default) or `png` (the overlay).
+    /// `json` (default), `png` (the overlay) or `glb` (the 3D scene).
     #[serde(default)]
     format: Option<String>,
 }
@@ -36,7 +37,7 @@ pub struct PlanQuery {
     summary = "Plan a grasp",
     description = "A JSON body (PlanRequestJson: a cloud or an RGB-D frame, a hand, options, hints), or multipart/form-data with a `cloud` file part (PCD or PLY) or `color` and `depth` file parts (PNG/JPEG colour, 16-bit PNG depth), and a `request` JSON part. See the README's API and Perception sections.",
     params(
-        ("format" = Option<String>, Query, description = "`json` (default): the plan as JSON; `png`: the overlay picture (RGB-D input only)"),
+        ("format" = Option<String>, Query, description = "`json` (default): the plan as JSON; `png`: the overlay picture (RGB-D input only); `glb`: the plan as a binary glTF scene (the points, support plane, contacts, opposition and, for a hand with kinematics, the hand posed at the pre-grasp, grasp and squeeze)"),
         ("x-request-timeout-ms" = Option<u64>, Header, description = "The caller's time budget, whole milliseconds, at least 1; 504 when it passes"),
     ),
     request_body(content(
@@ -44,9 +45,10 @@ pub struct PlanQuery {
         (PlanUpload = "multipart/form-data"),
     )),
     responses(
-        (status = 200, description = "The plan (JSON), or with `format=png` the overlay picture", content(
+        (status = 200, description = "The plan (JSON), or with `format=png` the overlay picture, with `format=glb` the 3D scene", content(
             (PlanResponseJson = "application/json"),
             ("image/png"),
+            ("model/gltf-binary"),
         )),
         (status = 400, description = "Bad input, naming the field", body = ErrorJson),
         (status = 401, description = "Missing or wrong bearer token (only when tokens are configured)", body = ErrorJson),
@@ -66,15 +68,19 @@ pub async fn plan(
     let format = query
         .map_err(|e| ApiError::invalid(FieldError::new("query", e.body_text())))
         .and_then(|q| match q.0.format.as_deref() {
-            None | Some("json") => Ok(false),
-            Some("png") => Ok(true),
+            None | Some("json") => Ok(Format::Json),
+            Some("png") => Ok(Format::Png),
+            Some("glb") => Ok(Format::Glb),
             Some(other) => Err(ApiError::invalid(FieldError::new(
                 "format",
-                format!("unknown format '{}' (json or png)", other.escape_debug()),
+                format!(
+                    "unknown format '{}' (json, png or glb)",
+                    other.escape_debug()
+                ),
             ))),
         });
-    let png = match format {
-        Ok(png) => png,
+    let format = match format {
+        Ok(f) => f,
         Err(e) => return Err(after_reading_body(request, &limits, e).await),
     };
     let plan_request = match read_body(
@@ -92,24 +98,43 @@ pub async fn plan(
         }
     };
     let mut plan_request = plan_request;
-    if png {
-        if !matches!(plan_request.source, PlanSource::Rgbd(_)) {
-            return Err(ApiError::invalid(FieldError::new(
-                "format",
-                "format=png draws on the colour image: it needs rgbd input",
-            )));
+    match format {
+        Format::Png => {
+            if !matches!(plan_request.source, PlanSource::Rgbd(_)) {
+                return Err(ApiError::invalid(FieldError::new(
+                    "format",
+                    "format=png draws on the colour image: it needs rgbd input",
+                )));
+            }
+            plan_request.output.overlay = true;
         }
-        plan_request.output.overlay = true;
+        Format::Glb => plan_request.output.scene_glb = true,
+        Format::Json => {}
     }
     let plan = runner.plan(plan_request, Transport::Rest).await?;
-    if png {
-        let bytes = plan
-            .perception
-            .and_then(|p| p.overlay_png)
-            .unwrap_or_default();
-        return Ok(([(CONTENT_TYPE, "image/png")], bytes).into_response());
+    match format {
+        Format::Png => {
+            let bytes = plan
+                .perception
+                .and_then(|p| p.overlay_png)
+                .unwrap_or_default();
+            Ok(([(CONTENT_TYPE, "image/png")], bytes).into_response())
+        }
+        Format::Glb => Ok((
+            [(CONTENT_TYPE, "model/gltf-binary")],
+            plan.scene_glb.unwrap_or_default(),
+        )
+            .into_response()),
+        Format::Json => Ok(Json(PlanResponseJson::from(&plan)).into_response()),
     }
-    Ok(Json(PlanResponseJson::from(&plan)).into_response())
+}
+
+/// What `POST /v1/plan` answers with (`?format=`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Format {
+    Json,
+    Png,
+    Glb,
 }
 
 fn from_multipart(parts: Vec<Part>, limits: &Limits) -> Result<PlanRequest, ApiError> {

@@ -294,6 +294,7 @@ pub fn plan_request_from_proto(
             overlay: o.overlay,
             moveit_grasps: o.moveit_grasps,
             frame_id: o.frame_id,
+            scene_glb: o.scene_glb,
         }
         .in_frame(&input_frame),
     })
@@ -330,6 +331,7 @@ pub fn plan_request_to_proto(r: &PlanRequest) -> pb::PlanGraspRequest {
             overlay: r.output.overlay,
             moveit_grasps: r.output.moveit_grasps,
             frame_id: r.output.frame_id.clone(),
+            scene_glb: r.output.scene_glb,
         }),
         extra_views: r.extra_views.iter().map(rgbd_to_proto).collect(),
     }
@@ -518,6 +520,7 @@ pub fn plan_to_proto(p: &GraspPlan) -> pb::PlanGraspResponse {
         approach: p.approach.as_ref().map(vec3_to_proto),
         candidates: p.candidates.iter().map(candidate_to_proto).collect(),
         moveit_grasps: p.moveit_grasps.iter().map(moveit_grasp_to_proto).collect(),
+        scene_glb: p.scene_glb.clone().unwrap_or_default(),
         quality: Some(quality_to_proto(q)),
         feasible: p.feasible,
         infeasible_reason: p.infeasible_reason.clone(),
@@ -659,5 +662,6 @@ pub fn plan_from_proto(p: pb::PlanGraspResponse) -> Result<GraspPlan, FieldError
             .map(|r| perception_from_proto(r, p.overlay_png, attention_pixel))
             .transpose()?,
         moveit_grasps,
+        scene_glb: (!p.scene_glb.is_empty()).then_some(p.scene_glb),
     })
 }

@@ -409,6 +409,7 @@ pub fn plan_request_from_json(
             overlay: o.overlay,
             moveit_grasps: o.moveit_grasps,
             frame_id: o.frame_id,
+            scene_glb: false,
         }
         .in_frame(&input_frame),
     })
