@@ -40,6 +40,13 @@ impl Pose {
     pub fn isometry(&self) -> Isometry3<f64> {
         Isometry3::from_parts(self.position.coords.into(), self.orientation)
     }
+
+    pub fn from_isometry(iso: &Isometry3<f64>) -> Self {
+        Self {
+            position: iso.translation.vector.into(),
+            orientation: iso.rotation,
+        }
+    }
 }
 
 /// One final contact.

@@ -10,6 +10,7 @@ pub mod grip_forces;
 pub mod hand_pose;
 pub mod kinematic_model;
 pub mod moveit_grasp;
+pub mod moveit_layout;
 pub mod object_shape;
 pub mod opposition;
 mod plan_assembly;

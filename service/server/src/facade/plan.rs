@@ -12,7 +12,7 @@ use graspd_core::perception::{
 use graspd_core::plan_overlay::draw_overlay;
 use graspd_core::plan_scene::{plan_scene, to_glb};
 use graspd_core::planning::PlaneSource;
-use graspd_core::planning::moveit_grasp::moveit_grasps;
+use graspd_core::planning::moveit_layout::moveit_grasps;
 use graspd_core::{FieldError, GraspPlan, HandDescription, PlanHints, PlanInput};
 
 /// A decoded frame and the information extracted from it, kept until the plan is made.

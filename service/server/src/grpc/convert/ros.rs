@@ -6,6 +6,7 @@ use crate::facade::{Limits, ServiceError};
 use graspd_core::FieldError;
 use graspd_core::cloud::PointCloud;
 use graspd_core::cloud::io::{PointCloud2Layout, PointField, read_pointcloud2, write_pointcloud2};
+use graspd_core::planning::Pose;
 use graspd_core::planning::moveit_grasp::{
     GripperTranslation, JointTrajectory, JointTrajectoryPoint, MoveItGrasp, ros_duration,
 };
@@ -154,7 +155,7 @@ pub fn moveit_grasp_to_proto(g: &MoveItGrasp) -> pb::MoveItGrasp {
         grasp_posture: Some(trajectory_to_proto(&g.grasp_posture, &g.frame_id)),
         grasp_pose: Some(pb::PoseStamped {
             header: header(&g.frame_id),
-            pose: Some(pose_to_proto(&g.grasp_pose)),
+            pose: Some(pose_to_proto(&Pose::from_isometry(&g.grasp_pose))),
         }),
         grasp_quality: g.grasp_quality,
         pre_grasp_approach: Some(translation_to_proto(&g.pre_grasp_approach)),
@@ -171,7 +172,7 @@ pub fn moveit_grasp_from_proto(g: pb::MoveItGrasp, field: &str) -> Result<MoveIt
     let pose = required(&g.grasp_pose, &at("grasp_pose"))?;
     Ok(MoveItGrasp {
         frame_id: frame_of(&pose.header),
-        grasp_pose: pose_from_proto(&pose.pose, &at("grasp_pose.pose"))?,
+        grasp_pose: pose_from_proto(&pose.pose, &at("grasp_pose.pose"))?.isometry(),
         pre_grasp_approach: translation_from_proto(
             g.pre_grasp_approach,
             &at("pre_grasp_approach"),

@@ -8,6 +8,7 @@ use crate::facade::{Limits, ServiceError};
 use base64::Engine;
 use graspd_core::cloud::PointCloud;
 use graspd_core::cloud::io::{PointCloud2Layout, PointField, read_pointcloud2};
+use graspd_core::planning::Pose;
 use graspd_core::planning::moveit_grasp::{
     GripperTranslation, JointTrajectory, MoveItGrasp, ros_duration,
 };
@@ -224,7 +225,7 @@ impl From<&MoveItGrasp> for MoveItGraspJson {
             grasp_posture: trajectory(&g.grasp_posture, &g.frame_id),
             grasp_pose: PoseStampedJson {
                 header: header(&g.frame_id),
-                pose: (&g.grasp_pose).into(),
+                pose: (&Pose::from_isometry(&g.grasp_pose)).into(),
             },
             grasp_quality: g.grasp_quality,
             pre_grasp_approach: translation(&g.pre_grasp_approach),
