@@ -246,7 +246,7 @@ pub struct GraspPlan {
     #[serde(default)]
     pub perception: Option<crate::perception::PerceptionReport>,
     /// The candidates in the layout of `moveit_msgs/Grasp`, when asked for
-    /// ([`super::moveit_grasp`]).
+    /// ([`super::moveit_layout`]).
     #[serde(default)]
     pub moveit_grasps: Vec<super::moveit_grasp::MoveItGrasp>,
     /// The plan as a binary glTF scene, when asked for (`crate::plan_scene`).

@@ -87,7 +87,7 @@ pub struct OutputOptions {
     /// input).
     pub overlay: bool,
     /// Return the candidates also in the layout of `moveit_msgs/Grasp`
-    /// (`graspd_core::planning::moveit_grasp`).
+    /// (`graspd_core::planning::moveit_layout`).
     pub moveit_grasps: bool,
     /// The frame the plan is in, for the MoveIt grasps' headers ([`Self::in_frame`]).
     pub frame_id: String,

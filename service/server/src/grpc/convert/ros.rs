@@ -1,5 +1,5 @@
 //! ROS layouts (`ros.proto`): `sensor_msgs/PointCloud2` in, `moveit_msgs/Grasp` out — the rules
-//! live in core (`cloud::io::pointcloud2`, `planning::moveit_grasp`); this maps the messages.
+//! live in core (`cloud::io::pointcloud2`, `planning::moveit_layout`); this maps the messages.
 
 use super::values::*;
 use crate::facade::{Limits, ServiceError};

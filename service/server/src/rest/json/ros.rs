@@ -1,7 +1,7 @@
 //! ROS layouts in JSON, as rosbridge and `ros2 topic echo` write them: a `sensor_msgs/PointCloud2`
 //! in (`cloud2`, its `data` base64 or an array of bytes) and `moveit_msgs/Grasp` out
 //! (`moveit_grasps`, ROS 2 field names and nesting). The rules live in core
-//! (`cloud::io::pointcloud2`, `planning::moveit_grasp`).
+//! (`cloud::io::pointcloud2`, `planning::moveit_layout`).
 
 use super::values::{PoseJson, Vec3Json};
 use crate::facade::{Limits, ServiceError};
@@ -170,7 +170,7 @@ pub struct GripperTranslationJson {
 }
 
 /// `moveit_msgs/Grasp` (ROS 2 field names and nesting; how each is filled:
-/// `graspd_core::planning::moveit_grasp`).
+/// `graspd_core::planning::moveit_layout`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct MoveItGraspJson {
     pub id: String,
