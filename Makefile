@@ -38,6 +38,7 @@ test:
 	$(CARGO) build --bins
 	$(CARGO) test --workspace
 	scripts/python-client-test.sh
+	scripts/browser-test.sh
 
 fmt:
 	$(CARGO) fmt --all

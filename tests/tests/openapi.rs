@@ -23,6 +23,8 @@ const ROUTES: &[(&str, &str)] = &[
     ("GET", "/readyz"),
     ("GET", "/metrics"),
     ("GET", "/openapi.json"),
+    ("GET", "/"),
+    ("GET", "/console/{path}"),
 ];
 
 const TOKEN: &str = "openapi-test-token";
@@ -42,7 +44,12 @@ fn routes_in_source() -> BTreeSet<(String, String)> {
     .expect("the router's source");
     let mut routes = BTreeSet::new();
     for call in source.split(".route(").skip(1) {
-        let path = call.split('"').nth(1).expect("a quoted path").to_string();
+        // axum's catch-all `{*name}` is OpenAPI's `{name}`.
+        let path = call
+            .split('"')
+            .nth(1)
+            .expect("a quoted path")
+            .replace("{*", "{");
         // The method router: up to the end of the call (the next `.route(`/`.fallback(`).
         let methods = call.split(".fallback(").next().unwrap_or(call);
         let bytes = methods.as_bytes();

@@ -3,6 +3,7 @@
 
 pub mod body;
 pub mod calibrations;
+pub mod console;
 mod drain;
 pub mod error;
 pub mod hands;
@@ -67,6 +68,8 @@ pub fn router(runner: PlanRunner, ops: Ops) -> Router {
         .route("/readyz", get(ready))
         .route("/metrics", get(metrics_text))
         .route("/openapi.json", get(openapi::openapi_json))
+        .route("/", get(console::index))
+        .route("/console/{*path}", get(console::file))
         .fallback(not_found)
         .layer(DefaultBodyLimit::max(limit))
         .layer(edge)
@@ -97,9 +100,13 @@ pub async fn serve(
     }
 }
 
-/// Paths answered without a token: the probes, the metrics and the OpenAPI document.
+/// Paths answered without a token: the probes, the metrics, the OpenAPI document and the web
+/// console (its page and files hold no data; its API calls carry the token).
 fn open(path: &str) -> bool {
-    matches!(path, "/healthz" | "/readyz" | "/metrics" | "/openapi.json")
+    matches!(
+        path,
+        "/healthz" | "/readyz" | "/metrics" | "/openapi.json" | "/"
+    ) || path.starts_with("/console/")
 }
 
 /// `METHOD /route/{template}`; `unmatched` for the fallback.

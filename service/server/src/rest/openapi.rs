@@ -49,6 +49,8 @@ pub async fn openapi_json() -> Json<&'static Document> {
         super::ready,
         super::metrics_text,
         openapi_json,
+        super::console::index,
+        super::console::file,
     ),
     components(schemas(json::ErrorJson, json::StabilizeMessageJson)),
     modifiers(&Security),
@@ -56,7 +58,7 @@ pub async fn openapi_json() -> Json<&'static Document> {
         (name = "plan", description = "Grasp planning"),
         (name = "hands", description = "The hand catalog"),
         (name = "tactile", description = "Tactile stabilization"),
-        (name = "operations", description = "Probes, metrics and this document; open without a token"),
+        (name = "operations", description = "Probes, metrics, this document and the web console; open without a token"),
     )
 )]
 struct ApiDoc;
