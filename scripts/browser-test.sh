@@ -29,5 +29,6 @@ trap 'kill $pid 2>/dev/null || true; rm -f "$log"' EXIT
 for _ in $(seq 150); do grep -q "graspd listening" "$log" && break; sleep 0.2; done
 rest="$(sed -n 's/^graspd listening grpc=[^ ]* rest=\([^ ]*\).*/\1/p' "$log")"
 [ -n "$rest" ] || { cat "$log"; exit 1; }
-BROWSER_TOOLS="$tools" node "$root/tests/browser/console.mjs" \
+BROWSER_TOOLS="$tools" HAND_FOLDER="$root/../shared/testdata/hands/robotiq_2f85" \
+  RGB="$root/examples/rgbd/rgb.png" DEPTH="$root/examples/rgbd/depth.png" node "$root/tests/browser/console.mjs" \
   "http://$rest/" "$token" "$out/console.png"

@@ -3,6 +3,8 @@
 // imported). The page loads its hands once the token is typed, plans on the example cloud and
 // draws graspd's own glTF scene; the test checks what the scene holds — the points, the
 // contacts, the opposition, the hand at the grasp — and the figures, and keeps a screenshot.
+// Then it uploads a hand as a folder (HAND_FOLDER) and plans for it on an RGB-D pair (RGB,
+// DEPTH).
 //
 // Usage: BROWSER_TOOLS=DIR node console.mjs URL TOKEN SCREENSHOT.png (DIR holds node_modules
 // with playwright-core: scripts/browser-test.sh installs it in .tools/browser).
@@ -74,8 +76,43 @@ try {
     console.log(`console test: ${nodes.length} scene nodes, ${plan.grasp_type}, ` +
                 `feasible ${plan.feasible}, ${drawn} drawn pixels at the centre`);
   }
-  if (errors.length) fail(`page errors: ${errors.join('; ')}`);
   await page.screenshot({ path: screenshot });
+
+  // A hand uploaded as a folder (the shared 2F-85's MJCF and meshes), then planned for.
+  await page.click('#register summary');
+  await page.fill('#hand-name', 'uploaded_2f85');
+  await page.setInputFiles('#hand-folder', process.env.HAND_FOLDER);
+  await page.click('#hand-upload');
+  await page.waitForFunction(() => /registered|hand:/.test(
+    document.getElementById('status').textContent), null, { timeout: 60000 });
+  const registered = await page.evaluate(() => document.getElementById('status').textContent);
+  if (!registered.includes('uploaded_2f85 registered')) fail(`upload: ${registered}`);
+  if (await page.inputValue('#hand') !== 'uploaded_2f85') fail('the uploaded hand is not chosen');
+
+  // An RGB-D frame (the example pair) planned for it.
+  await page.click('#rgbd summary');
+  await page.setInputFiles('#color', process.env.RGB);
+  await page.setInputFiles('#depth', process.env.DEPTH);
+  await page.evaluate(() => { window.graspdScene = null; });
+  await page.click('#plan');
+  await page.waitForFunction(() => window.graspdScene || document.getElementById('status')
+    .classList.contains('error'), null, { timeout: 60000 });
+  const frame = await page.evaluate(() => ({
+    scene: window.graspdScene,
+    status: document.getElementById('status').textContent,
+  }));
+  if (!frame.scene) {
+    fail(`RGB-D: ${frame.status}`);
+  } else {
+    const nodes = frame.scene.nodes;
+    if (!nodes.includes('cloud') || !nodes.some((n) => n.startsWith('grasp/'))) {
+      fail(`RGB-D scene: ${nodes.join(', ')}`);
+    }
+    if (!frame.scene.plan.perception) fail('RGB-D: the plan has no perception report');
+    console.log(`console test: RGB-D with the uploaded hand, ${nodes.length} scene nodes, ` +
+                `${frame.scene.plan.grasp_type}`);
+  }
+  if (errors.length) fail(`page errors: ${errors.join('; ')}`);
 } finally {
   await browser.close();
 }

@@ -95,17 +95,76 @@ $('example').addEventListener('click', async () => {
 });
 $('token').addEventListener('change', loadHands);
 
+/// The RGB-D pair, when both images are chosen.
+function rgbdFiles() {
+  const color = $('color').files[0], depth = $('depth').files[0];
+  return color && depth ? { color, depth } : null;
+}
+
 function form() {
   const body = new FormData();
-  body.append('cloud', new Blob([state.cloud]), state.cloudName);
   const request = {
     hand_name: $('hand').value,
     options: { seed: Number($('seed').value) || 0 },
   };
-  if ($('table').checked) request.hints = { support_plane: { normal: [0, 0, 1], offset: 0 } };
+  const frame = rgbdFiles();
+  if (frame) {
+    const [fx, fy, cx, cy] = $('intrinsics').value.split(/[ ,]+/).filter(Boolean).map(Number);
+    request.rgbd = { intrinsics: { fx, fy, cx, cy } };
+    body.append('color', frame.color, frame.color.name);
+    body.append('depth', frame.depth, frame.depth.name);
+  } else {
+    body.append('cloud', new Blob([state.cloud]), state.cloudName);
+    if ($('table').checked) request.hints = { support_plane: { normal: [0, 0, 1], offset: 0 } };
+  }
   body.append('request', new Blob([JSON.stringify(request)], { type: 'application/json' }));
   return body;
 }
+
+for (const id of ['color', 'depth']) {
+  $(id).addEventListener('change', () => {
+    if (rgbdFiles()) {
+      $('plan').disabled = false;
+      status('RGB-D frame chosen. Pick a hand and plan.');
+    }
+  });
+}
+
+// A hand from a folder: its MJCF or URDF document at the top, the meshes with their paths
+// relative to it, as POST /v1/hands takes them.
+$('hand-upload').addEventListener('click', async () => {
+  const files = [...$('hand-folder').files];
+  const relative = (f) => (f.webkitRelativePath || f.name).split('/').slice(1).join('/') || f.name;
+  // The document at the folder's top; MuJoCo Menagerie's scene.xml (which includes the hand)
+  // comes last.
+  const documents = files
+    .filter((f) => !relative(f).includes('/') && /\.(xml|urdf)$/i.test(f.name))
+    .sort((a, b) => (a.name === 'scene.xml') - (b.name === 'scene.xml'));
+  const model = documents[0];
+  if (!model) {
+    status('hand: the folder needs an .xml (MJCF) or .urdf document at its top', true);
+    return;
+  }
+  const body = new FormData();
+  body.append('name', $('hand-name').value.trim());
+  body.append('format', /\.urdf$/i.test(model.name) ? 'urdf' : 'mjcf');
+  body.append('model', model, model.name);
+  // The meshes (and textures) the document may name; README and LICENSE files stay behind.
+  for (const f of files) {
+    if (f !== model && /\.(stl|obj|msh|png)$/i.test(f.name)) body.append('asset', f, relative(f));
+  }
+  status('Registering the hand…');
+  const response = await fetch('/v1/hands', { method: 'POST', body, headers: headers() });
+  if (!response.ok) {
+    status(`hand: ${await errorText(response)}`, true);
+    return;
+  }
+  const registered = await response.json();
+  const name = registered.hand?.name || $('hand-name').value.trim();
+  await loadHands();
+  $('hand').value = name;
+  status(`Hand ${name} registered.`);
+});
 
 function figures(plan) {
   const q = plan.quality || {};
