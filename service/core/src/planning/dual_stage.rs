@@ -8,10 +8,10 @@
 //! slot drawing from the whole cloud.
 
 use super::annealing::{Annealed, Schedule, Scored, SearchProblem, anneal};
+use super::evaluation::{Assessment, SearchContext};
 use super::grasp_plan::StageStats;
 use super::opposition::OppositionSearch;
 use super::request::PlannerMode;
-use super::search_context::{Assessment, SearchContext};
 use super::slot_set::SlotSet;
 use nalgebra::{Point3, Vector3};
 use rand::RngExt;

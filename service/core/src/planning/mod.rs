@@ -3,6 +3,7 @@
 pub mod annealing;
 pub mod collision;
 pub mod dual_stage;
+pub mod evaluation;
 pub mod ferrari_canny;
 pub mod final_configuration;
 pub mod grasp_plan;
@@ -19,7 +20,6 @@ pub mod quality;
 pub mod request;
 pub mod robustness;
 mod scene;
-pub mod search_context;
 pub mod slot_set;
 #[cfg(test)]
 mod test_scene;

@@ -7,7 +7,7 @@
 //! cones (μ), so that two opposing forces can squeeze the object.
 
 use super::annealing::{Scored, SearchProblem};
-use super::search_context::{Assessment, SearchContext};
+use super::evaluation::{Assessment, SearchContext};
 use super::slot_set::SlotSet;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;

@@ -4,6 +4,7 @@
 //! ranked `candidates`.
 
 use super::dual_stage::SearchOutcome;
+use super::evaluation::SearchContext;
 use super::ferrari_canny::{WrenchModel, ferrari_canny};
 use super::final_configuration::FinalConfiguration;
 use super::grasp_plan::*;
@@ -11,7 +12,6 @@ use super::kinematic_model::KinematicModel;
 use super::quality::ContactPoint;
 use super::request::*;
 use super::scene::Scene;
-use super::search_context::SearchContext;
 use crate::error::{FieldError, PlanError};
 use crate::grasp_type::{GraspType, HandPart};
 use crate::hand::PALM;

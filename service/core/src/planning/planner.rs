@@ -2,6 +2,7 @@
 //! stage 1 (pregrasping opposition), stage 2 (final contacts), hand pose and checks.
 
 use super::dual_stage;
+use super::evaluation::SearchContext;
 use super::final_configuration;
 use super::grasp_plan::*;
 use super::kinematic_model::KinematicModel;
@@ -9,7 +10,6 @@ use super::object_shape::ObjectShape;
 use super::plan_assembly::{assemble, final_plan};
 use super::request::*;
 use super::scene::{complete_unseen, separate_support_plane};
-use super::search_context::SearchContext;
 use super::type_choice::{self, TypeAttempt, plausible_types};
 use super::type_rule;
 use crate::cloud::{CloudIndex, LazyNormals, PointCloud};

@@ -1,9 +1,9 @@
 //! A scene for the planning stages' unit tests: a rod lying on a table, seen from above, and
 //! the search context of a built-in hand on it.
 
+use super::evaluation::SearchContext;
 use super::object_shape::ObjectShape;
 use super::request::PlannerOptions;
-use super::search_context::SearchContext;
 use crate::cloud::{CloudIndex, LazyNormals, Orientation, Plane};
 use crate::grasp_type::GraspType;
 use crate::hand::{HandCatalog, HandDescription, ResolvedGrasp};

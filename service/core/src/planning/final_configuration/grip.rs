@@ -8,8 +8,8 @@ use super::pregrasp::{advance_contacts, joints_at};
 use super::squeeze::{self, squeeze_joints};
 use super::{FinalConfiguration, PREGRASP_TRAVELS, placement};
 use crate::error::FieldError;
+use crate::planning::evaluation::SearchContext;
 use crate::planning::kinematic_model::KinematicModel;
-use crate::planning::search_context::SearchContext;
 use nalgebra::{Isometry3, Vector3};
 
 impl FinalConfiguration {

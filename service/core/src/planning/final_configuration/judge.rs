@@ -9,10 +9,10 @@ use super::*;
 use crate::error::FieldError;
 use crate::hand::kinematics::PreShape;
 use crate::planning::collision::PLANE_TOLERANCE;
+use crate::planning::evaluation::SearchContext;
 use crate::planning::kinematic_model::KinematicModel;
 use crate::planning::quality::{self, ContactPoint};
 use crate::planning::robustness::Robustness;
-use crate::planning::search_context::SearchContext;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
 /// Places, closes, squeezes and judges one candidate; None when the hand cannot even start

@@ -49,10 +49,10 @@ pub mod placement;
 mod pregrasp;
 mod squeeze;
 
+use super::evaluation::SearchContext;
 use super::kinematic_model::KinematicModel;
 use super::quality::ContactPoint;
 use super::robustness::Robustness;
-use super::search_context::SearchContext;
 use crate::error::FieldError;
 use crate::hand::kinematics::PreShape;
 use closing_sweep::SweepContact;

@@ -8,7 +8,7 @@
 //! the opposition line; best prior first. A palm opposition fixes the approach (the line
 //! itself): its candidates are rolls about the line instead.
 
-use super::super::search_context::SearchContext;
+use super::super::evaluation::SearchContext;
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// Turns about the opposition line tried for each approach, degrees.

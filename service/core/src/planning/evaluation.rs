@@ -1,6 +1,7 @@
-//! What both stages share: the object, the hand, the guidance (p_att, n_att) and the evaluation of
-//! a contact set against Eq 5.2 — hand frame, palm height, R, G, S, the hand's limits and the
-//! collision check. Stage-specific feasibility lives in `opposition.rs` and `dual_stage.rs`.
+//! The evaluation of a contact set against Eq 5.2 — hand frame, palm height, R, G, S, the hand's
+//! limits and the collision check — and what both stages share for it ([`SearchContext`]: the
+//! object, the hand, the guidance p_att, n_att). Stage-specific feasibility lives in
+//! `opposition.rs` (stage 1) and `dual_stage.rs` (stage 2).
 
 use super::annealing::Scored;
 use super::collision::{self, FingerContact, PLANE_TOLERANCE, PosedHand};
