@@ -98,6 +98,15 @@ fn cloud2_json(c: &pb::PointCloud2) -> serde_json::Value {
     })
 }
 
+/// [`json_request`] with the cloud given as `cloud2` instead.
+fn json_with_cloud2(hand: &str, seed: u64, cloud: &pb::PointCloud2) -> serde_json::Value {
+    let mut body = json_request(hand, seed);
+    let o = body.as_object_mut().unwrap();
+    o.remove("cloud");
+    o.insert("cloud2".into(), cloud2_json(cloud));
+    body
+}
+
 async fn rest_plan(server: &Server, body: &serde_json::Value) -> serde_json::Value {
     let response = http()
         .post(server.rest_url("/v1/plan"))
@@ -140,10 +149,7 @@ async fn pointcloud2_layouts_plan_like_the_packed_cloud() {
 
     // REST: base64 data, and data as an array of byte values.
     let reference = without_timings(rest_plan(&server, &json_request("shadow", 3)).await);
-    let mut body = json_request("shadow", 3);
-    let o = body.as_object_mut().unwrap();
-    o.remove("cloud");
-    o.insert("cloud2".into(), cloud2_json(&organised_cloud2(&points, 48)));
+    let mut body = json_with_cloud2("shadow", 3, &organised_cloud2(&points, 48));
     assert_eq!(without_timings(rest_plan(&server, &body).await), reference);
     let mut array = cloud2_json(&unorganised);
     array["data"] = serde_json::json!(unorganised.data);
@@ -190,10 +196,7 @@ async fn bad_pointcloud2_layouts_are_refused_naming_the_field() {
         assert_eq!(status.code(), code, "{field}: {status:?}");
         assert!(status.message().contains(field), "{field}: {status:?}");
 
-        let mut body = json_request("shadow", 1);
-        let o = body.as_object_mut().unwrap();
-        o.remove("cloud");
-        o.insert("cloud2".into(), cloud2_json(&cloud));
+        let body = json_with_cloud2("shadow", 1, &cloud);
         let response = http()
             .post(server.rest_url("/v1/plan"))
             .json(&body)
@@ -306,13 +309,7 @@ async fn moveit_grasps_carry_each_ranked_candidate() {
     }
 
     // REST: the same grasps in ROS 2's JSON nesting; `output.frame_id` names the frame.
-    let mut body = json_request("robotiq_2f85", 3);
-    let o = body.as_object_mut().unwrap();
-    o.remove("cloud");
-    o.insert(
-        "cloud2".into(),
-        cloud2_json(&organised_cloud2(&cylinder(2000), 48)),
-    );
+    let mut body = json_with_cloud2("robotiq_2f85", 3, &organised_cloud2(&cylinder(2000), 48));
     body["options"]["candidates"] = serde_json::json!(3);
     body["output"] = serde_json::json!({"moveit_grasps": true, "frame_id": "table"});
     let json = rest_plan(&server, &body).await;

@@ -147,6 +147,8 @@ def test_moveit_grasps_come_in_the_ros_layout(server):
         [plan.approach.x, plan.approach.y, plan.approach.z])
     assert g["post_grasp_retreat"]["direction"]["vector"] == {"x": 0.0, "y": 0.0, "z": 1.0}
     assert g["grasp_quality"] == pytest.approx(plan.quality.objective)
+    # A parametric hand has no joints: its postures carry no points.
+    assert g["grasp_posture"]["points"] == [] and g["grasp_posture"]["joint_names"] == []
 
 
 def test_bad_input_is_named_and_the_next_request_works(server):

@@ -151,17 +151,11 @@ def pointcloud2_from_ros(msg) -> ros_pb2.PointCloud2:
 def moveit_grasps_of(plan: plan_pb2.PlanGraspResponse) -> list:
     """The plan's ``moveit_grasps`` as dicts in the layout of ROS 2's moveit_msgs/msg/Grasp (field
     names and nesting), ready for ``rosidl_runtime_py.set_message_fields(Grasp(), d)``."""
-    out = []
-    for g in plan.moveit_grasps:
-        d = json_format.MessageToDict(g, preserving_proto_field_name=True,
-                                      always_print_fields_with_no_presence=True)
-        # proto3 JSON writes 64-bit integers as strings; ROS wants numbers.
-        for posture in ("pre_grasp_posture", "grasp_posture"):
-            for point in d[posture]["points"]:
-                t = point["time_from_start"]
-                t["sec"], t["nanosec"] = int(t.get("sec", 0)), int(t.get("nanosec", 0))
-        out.append(d)
-    return out
+    return [
+        json_format.MessageToDict(g, preserving_proto_field_name=True,
+                                  always_print_fields_with_no_presence=True)
+        for g in plan.moveit_grasps
+    ]
 
 
 def _image(array: np.ndarray, encoding: str) -> plan_pb2.Image:
