@@ -5,7 +5,8 @@
 # `bench` with no further arguments is the standard run of docs/sim-benchmark.md, four hands,
 # 20 trials per cell, placements within ±10 cm: the Table 5.2 objects from a single RGB-D view,
 # all 13 shared objects from a single view, and the Table 5.2 objects from 3 fused views, into
-# sim-results/{table-5-2,all-objects,fused-views}.
+# sim-results/{table-5-2,all-objects,fused-views}; `stabilize` with no further arguments runs the
+# tactile closed loop twice (Eq 6.9 as printed, and with the session options that stop the drops).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 hands="$root/../shared/testdata/hands"
@@ -31,6 +32,12 @@ if [ "$#" -eq 1 ] && [ "$1" = bench ]; then
     sim bench --trials 20 --out sim-results/table-5-2
     sim bench --trials 20 --objects all --out sim-results/all-objects
     sim bench --trials 20 --views 3 --out sim-results/fused-views
+elif [ "$#" -eq 1 ] && [ "$1" = stabilize ]; then
+    # The tactile closed loop of docs/sim-benchmark.md: Eq 6.9 as printed, then with the
+    # session's slip latch, slip from the contact centroid's motion and f_max = 6 f0.
+    sim stabilize --hand robotiq_2f85 --trials 10 --seed 0 --out sim-results/stabilize-eq-6-9
+    sim stabilize --hand robotiq_2f85 --trials 10 --seed 0 --latch-slip --centroid-slip 20 \
+        --max-force 6 --out sim-results/stabilize
 else
     sim "$@"
 fi

@@ -8,6 +8,7 @@
 
 use graspd::facade::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
 use graspd::grpc::convert;
+use graspd_core::tactile::stabilizer::LATCH_STEP_S;
 use graspd_core::tactile::{Frame, Recording, StabilizerConfig, TareConfig};
 use graspd_e2e::{Server, assert_valid_plan_works, http, rest_error};
 use graspd_proto::v1 as pb;
@@ -165,7 +166,20 @@ async fn grpc_stream_replays_a_real_recording_and_analyze_gives_the_same_results
     }
 
     // Analyze, the same recording as JSON.
-    let json_frames: Vec<serde_json::Value> = frames
+    let session = serde_json::json!({
+        "fingers": [{"name": "th", "layout": "biotac", "tare": {"pretared": true}}]
+    });
+    assert_eq!(analyze_json(&server, session, &frames).await, streamed);
+}
+
+/// `POST /v1/tactile/analyze` with a JSON body: `session` over `frames` (one finger each);
+/// returns the answer's frames.
+async fn analyze_json(
+    server: &Server,
+    session: serde_json::Value,
+    frames: &[Frame],
+) -> Vec<serde_json::Value> {
+    let frames: Vec<serde_json::Value> = frames
         .iter()
         .map(|f| {
             let r = &f.fingers[0];
@@ -174,19 +188,110 @@ async fn grpc_stream_replays_a_real_recording_and_analyze_gives_the_same_results
             }]})
         })
         .collect();
-    let request = serde_json::json!({
-        "session": {"fingers": [{"name": "th", "layout": "biotac", "tare": {"pretared": true}}]},
-        "frames": json_frames,
-    });
     let response = http()
         .post(server.rest_url("/v1/tactile/analyze"))
-        .json(&request)
+        .json(&serde_json::json!({"session": session, "frames": frames}))
         .send()
         .await
         .unwrap();
+    analyzed_frames(response).await
+}
+
+/// The frames of a 200 answer of `POST /v1/tactile/analyze`.
+async fn analyzed_frames(response: reqwest::Response) -> Vec<serde_json::Value> {
     assert_eq!(response.status(), 200);
     let body: serde_json::Value = response.json().await.unwrap();
-    assert_eq!(body["frames"].as_array().unwrap(), &streamed);
+    body["frames"].as_array().unwrap().clone()
+}
+
+/// `latch_slip` (a deviation from Eq 6.9, off by default) on the real slide: every transport
+/// gives the same answers, and in contact f_d is f0 + δf_s per slip episode since the contact
+/// began, a slip that lasts counting again every LATCH_STEP_S (clipped at f_max) — frames that
+/// no longer slip keep the raised force, where Eq 6.9 as printed drops it back to f0.
+#[tokio::test]
+async fn a_latched_slip_keeps_the_force_raised_until_contact_is_lost() {
+    let server = Server::start();
+    let text = recording_text();
+    let analyze = |query: &'static str| {
+        let url = server.rest_url(&format!(
+            "/v1/tactile/analyze?pretared=true&finger=th&layout=biotac&delta_material=0{query}"
+        ));
+        let text = text.clone();
+        async move {
+            let response = http()
+                .post(url)
+                .header("content-type", "text/csv")
+                .body(text)
+                .send()
+                .await
+                .unwrap();
+            analyzed_frames(response).await
+        }
+    };
+    let latched = analyze("&latch_slip=true").await;
+    let plain = analyze("").await;
+    let (f0, delta, f_max) = (1.5, 0.5, 5.0);
+    let mut episodes = 0u32;
+    let mut slipping = false;
+    let mut raised_at = f64::NEG_INFINITY;
+    let (mut held_after_slip, mut fell_back) = (0, 0);
+    for (i, (l, p)) in latched.iter().zip(&plain).enumerate() {
+        let (l, p) = (&l["fingers"][0], &p["fingers"][0]);
+        assert_eq!(
+            l["event"], p["event"],
+            "frame {i}: the latch changes no detection"
+        );
+        let event = l["event"].as_str().unwrap();
+        let t = latched[i]["timestamp"].as_f64().unwrap();
+        match event {
+            "non_contact" => episodes = 0,
+            "slip" if !slipping || t - raised_at >= LATCH_STEP_S => {
+                episodes += 1;
+                raised_at = t;
+            }
+            _ => {}
+        }
+        slipping = event == "slip";
+        let want = if event == "non_contact" {
+            f0
+        } else {
+            (f0 + delta * episodes as f64).min(f_max)
+        };
+        let got = l["desired_force"].as_f64().unwrap();
+        assert!(
+            (got - want).abs() < 1e-9,
+            "frame {i}: f_d {got}, want {want}"
+        );
+        if event == "contact" && episodes > 0 {
+            held_after_slip += 1;
+            if p["desired_force"].as_f64().unwrap() == f0 {
+                fell_back += 1;
+            }
+        }
+    }
+    assert!(
+        held_after_slip > 0 && fell_back == held_after_slip,
+        "contact after slip: {held_after_slip} frames, Eq 6.9 dropped {fell_back} back to f0"
+    );
+
+    // The JSON body and the gRPC stream take the same option and answer alike.
+    let frames = recording_frames();
+    let session_json = serde_json::json!({
+        "fingers": [{"name": "th", "layout": "biotac", "tare": {"pretared": true}}],
+        "delta_material": 0.0, "latch_slip": true,
+    });
+    assert_eq!(analyze_json(&server, session_json, &frames).await, latched);
+    let mut grpc_session = session();
+    grpc_session.delta_material = Some(0.0);
+    grpc_session.latch_slip = Some(true);
+    let open = open(&server, grpc_session).await.expect("session opens");
+    let (answers, end) = exchange(open, &frames).await;
+    assert!(end.is_none(), "{end:?}");
+    let streamed: Vec<serde_json::Value> = answers
+        .into_iter()
+        .map(|m| serde_json::to_value(convert::setpoint_from_proto(m).unwrap()).unwrap())
+        .collect();
+    assert_eq!(streamed, latched);
 }
 
 #[tokio::test]
@@ -264,6 +369,10 @@ async fn bad_sessions_and_frames_end_the_stream_naming_the_field() {
     }));
     let e = open(&server, s).await.unwrap_err();
     assert_eq!(field_of(&e), "session.fingers[0].layout.electrodes[1]");
+    let mut s = session();
+    s.centroid_slip_mm_s = Some(-5.0);
+    let e = open(&server, s).await.unwrap_err();
+    assert_eq!(field_of(&e), "session.centroid_slip_mm_s");
 
     // A frame as the first message.
     let mut client = TactileStabilizerClient::connect(server.grpc_url())
@@ -298,6 +407,19 @@ async fn bad_sessions_and_frames_end_the_stream_naming_the_field() {
         .unwrap();
     let (status, _, field, _) = rest_error(response).await;
     assert_eq!((status, field.as_deref()), (400, Some("query")));
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze?pretared=true&centroid_slip_mm_s=0"))
+        .header("content-type", "text/csv")
+        .body(recording_text())
+        .send()
+        .await
+        .unwrap();
+    let (status, _, field, message) = rest_error(response).await;
+    assert_eq!(
+        (status, field.as_deref()),
+        (400, Some("session.centroid_slip_mm_s"))
+    );
+    assert!(message.contains("positive"), "{message}");
 }
 
 #[tokio::test]

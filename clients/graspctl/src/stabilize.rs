@@ -82,6 +82,14 @@ pub struct StabilizeArgs {
     /// the stride and the taring must be those it was fitted with.
     #[arg(long, value_name = "NAME")]
     calibration: Option<String>,
+    /// Latched slip, a deviation from Eq 6.9: each slip episode raises f_d by δf_s until the
+    /// finger loses contact.
+    #[arg(long)]
+    latch_slip: bool,
+    /// Slip from the contact centroid's motion: a finger in contact whose electrode centroid
+    /// moves faster than this (mm/s) slips.
+    #[arg(long, value_name = "MM_S")]
+    centroid_slip_mm_s: Option<f64>,
     /// Print no live line, only the summary.
     #[arg(long)]
     quiet: bool,
@@ -115,6 +123,8 @@ impl StabilizeArgs {
             alpha: self.alpha,
             calibration_gain: self.calibration_gain,
             calibration: self.calibration.clone(),
+            latch_slip: self.latch_slip.then_some(true),
+            centroid_slip_mm_s: self.centroid_slip_mm_s,
         };
         convert::tactile_session_to_proto(&json::tactile_session_from_json(query.session()))
     }

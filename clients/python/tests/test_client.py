@@ -249,6 +249,18 @@ def test_a_stabilizer_session_answers_every_frame(server):
     assert th[119].force > 0
 
 
+def test_the_session_options_beyond_eq_6_9_reach_the_server(server):
+    with Client(server.grpc) as c:
+        with c.stabilizer([Finger("th")], latch_slip=True, centroid_slip_mm_s=20.0) as s:
+            answers = [s.step(0.01 * t, [raw_reading(t)]) for t in range(80)]
+        assert answers[-1].fingers[0].tared
+        with pytest.raises(grpc.RpcError) as e:
+            with c.stabilizer([Finger("th")], centroid_slip_mm_s=-1.0) as s:
+                s.step(0.0, [raw_reading(0)])
+    assert e.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert field_of(e.value) == "session.centroid_slip_mm_s"
+
+
 def test_a_frame_out_of_order_ends_the_session_naming_the_field(server):
     with Client(server.grpc) as c:
         with c.stabilizer([Finger("th", pretared=True)]) as s:

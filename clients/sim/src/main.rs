@@ -109,6 +109,17 @@ enum Command {
         /// (1 + this) · f0).
         #[arg(long, default_value_t = 1.0)]
         slip_gain: f64,
+        /// f_max of the stabilized session, in units of f0 (default: 1 + slip_gain).
+        #[arg(long)]
+        max_force: Option<f64>,
+        /// Latch slip in the stabilized session (`latch_slip`, a deviation from Eq 6.9: each
+        /// slip episode raises f_d by δf_s until contact is lost).
+        #[arg(long)]
+        latch_slip: bool,
+        /// Slip from the contact centroid's motion in the stabilized session, mm/s
+        /// (`centroid_slip_mm_s`; unset: off).
+        #[arg(long, value_name = "MM_S")]
+        centroid_slip: Option<f64>,
         #[arg(long, default_value = "sim-results")]
         out: PathBuf,
     },
@@ -271,6 +282,9 @@ fn real_main() -> Result<(), SimError> {
             pulse,
             pulse_s,
             slip_gain,
+            max_force,
+            latch_slip,
+            centroid_slip,
             out,
         } => {
             let hand = SimHand::load(&hand, &hands_dir)?;
@@ -280,6 +294,9 @@ fn real_main() -> Result<(), SimError> {
                 pulse,
                 pulse_s,
                 slip_gain,
+                max_force: max_force.unwrap_or(1.0 + slip_gain),
+                latch_slip,
+                centroid_slip_mm_s: centroid_slip,
             };
             let report = graspd_sim::tactile::run_protocol(
                 &hand,

@@ -118,6 +118,12 @@ pub struct Disturbance {
     pub pulse_s: f64,
     /// δf_s of the stabilized session, in units of f0.
     pub slip_gain: f64,
+    /// f_max of the stabilized session, in units of f0 (default 1 + slip_gain).
+    pub max_force: f64,
+    /// The session's latched slip (`latch_slip`, a deviation from Eq 6.9).
+    pub latch_slip: bool,
+    /// The session's slip from the contact centroid's motion, mm/s (`centroid_slip_mm_s`).
+    pub centroid_slip_mm_s: Option<f64>,
 }
 
 impl Default for Disturbance {
@@ -127,6 +133,9 @@ impl Default for Disturbance {
             pulse: 1.0,
             pulse_s: 0.5,
             slip_gain: 1.0,
+            max_force: 2.0,
+            latch_slip: false,
+            centroid_slip_mm_s: None,
         }
     }
 }
@@ -298,7 +307,9 @@ pub fn run_disturbance_trial(
                 delta_material: Some(0.0),
                 delta_slip: Some(dist.slip_gain * f0),
                 f_min: Some(0.0),
-                f_max: Some((1.0 + dist.slip_gain) * f0),
+                f_max: Some(dist.max_force * f0),
+                latch_slip: Some(dist.latch_slip),
+                centroid_slip_mm_s: dist.centroid_slip_mm_s,
                 detector: Some(pb::TactileDetector {
                     kind: Some(pb::tactile_detector::Kind::ModelFree(Default::default())),
                 }),
@@ -495,7 +506,7 @@ pub fn run_protocol(
     let _ = writeln!(
         md,
         "\nHand {}, seeds {}..{}, grip f0 = {} × m·g / (2 μ), added load rising to {} × m·g in \
-         {} s and staying {} s, δf_s = {} · f0, model-free detector.",
+         {} s and staying {} s, δf_s = {} · f0, f_max = {} · f0, {}, {}, model-free detector.",
         hand.label,
         seed,
         seed + trials as u64,
@@ -503,7 +514,17 @@ pub fn run_protocol(
         dist.pulse,
         dist.pulse_s,
         dist.pulse_s,
-        dist.slip_gain
+        dist.slip_gain,
+        dist.max_force,
+        if dist.latch_slip {
+            "slip latched (each slip episode, and each further 0.1 s of slip, adds δf_s until contact is lost)"
+        } else {
+            "Eq 6.9 as printed (no latch)"
+        },
+        match dist.centroid_slip_mm_s {
+            Some(v) => format!("slip also from the contact centroid moving faster than {v} mm/s"),
+            None => "slip from the detector alone".to_string(),
+        }
     );
     std::fs::create_dir_all(out)
         .map_err(|e| SimError::Input(format!("--out {}: {e}", out.display())))?;

@@ -447,7 +447,9 @@ class Client:
     def stabilizer(self, fingers: Sequence[Finger], calibration_gain: Optional[float] = None,
                    **law) -> StabilizerSession:
         """Opens a tactile session; ``law`` may set f0, delta_material, delta_slip, f_min,
-        f_max, window_length, stride, alpha."""
+        f_max, window_length, stride, alpha, latch_slip (each slip episode raises f_d by
+        delta_slip until contact is lost) and centroid_slip_mm_s (slip also when the contact
+        centroid moves faster than this)."""
         session = tactile_pb2.TactileSession()
         for f in fingers:
             finger = session.fingers.add(name=f.name, layout_name=f.layout)

@@ -14,7 +14,8 @@ pub enum ControlMode {
     Force,
 }
 
-/// f0, δf_m, δf_s and the safety clip [f_min, f_max] (same units as the estimated force).
+/// f0, δf_m, δf_s and the safety clip [f_min, f_max] (same units as the estimated force), and
+/// whether slip latches.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DesiredForceLaw {
     pub f0: f64,
@@ -22,6 +23,14 @@ pub struct DesiredForceLaw {
     pub delta_slip: f64,
     pub f_min: f64,
     pub f_max: f64,
+    /// A deviation from Eq 6.9, off by default: each slip episode (and each further
+    /// [`super::stabilizer::LATCH_STEP_S`] a slip lasts) raises f_d by δf_s for as long as the
+    /// finger stays in contact (a ratchet), instead of f_d falling back to f_d^m as soon as the
+    /// slip stops. Eq 6.9 answers a creeping object with a force that rises and
+    /// falls with each episode; a load that persists (an object heavier than f0 was set for)
+    /// makes it slip again each time ([`DesiredForceLaw::latched_force`]).
+    #[serde(default)]
+    pub latch_slip: bool,
 }
 
 impl Default for DesiredForceLaw {
@@ -34,6 +43,7 @@ impl Default for DesiredForceLaw {
             delta_slip: 0.5,
             f_min: 0.2,
             f_max: 5.0,
+            latch_slip: false,
         }
     }
 }
@@ -83,10 +93,22 @@ impl DesiredForceLaw {
         }
     }
 
-    /// f_d = clip(f_d^s, f_min, f_max) and the control mode (non-contact → position).
-    pub fn desired(&self, e: ContactEvent, m: Material) -> (f64, ControlMode) {
+    /// f_d^s with the latch ([`DesiredForceLaw::latch_slip`]): in contact, after
+    /// `slip_episodes` ≥ 1 slip episodes since the contact began, f_d^m + episodes · δf_s,
+    /// whether or not the finger slips now; Eq 6.9 otherwise (or with the latch off).
+    pub fn latched_force(&self, e: ContactEvent, f_dm: f64, slip_episodes: u32) -> f64 {
+        if self.latch_slip && slip_episodes > 0 && e != ContactEvent::NonContact {
+            f_dm + self.delta_slip * f64::from(slip_episodes)
+        } else {
+            self.event_force(e, f_dm)
+        }
+    }
+
+    /// f_d = clip(f_d^s, f_min, f_max) (with the latch, after `slip_episodes` slip episodes in
+    /// this contact) and the control mode (non-contact → position).
+    pub fn desired(&self, e: ContactEvent, m: Material, slip_episodes: u32) -> (f64, ControlMode) {
         let fd = self
-            .event_force(e, self.material_force(m))
+            .latched_force(e, self.material_force(m), slip_episodes)
             .clamp(self.f_min, self.f_max);
         let mode = if e == ContactEvent::NonContact {
             ControlMode::Position
@@ -109,6 +131,7 @@ mod tests {
             delta_slip: 0.75,
             f_min: 0.0,
             f_max: 10.0,
+            latch_slip: false,
         };
         let fdm = |m| match m {
             Material::Paper | Material::Plastic | Material::Unknown => 2.0,
@@ -118,7 +141,9 @@ mod tests {
         for m in Material::CLASSES.into_iter().chain([Material::Unknown]) {
             assert_eq!(law.material_force(m), fdm(m), "{m:?}");
             for e in ContactEvent::ALL {
-                let (fd, mode) = law.desired(e, m);
+                let (fd, mode) = law.desired(e, m, 0);
+                // Without the latch, past slip episodes change nothing (Eq 6.9 as printed).
+                assert_eq!(law.desired(e, m, 3), (fd, mode), "{m:?} {e:?}");
                 let want = match e {
                     ContactEvent::NonContact => 2.0,
                     ContactEvent::Contact => fdm(m),
@@ -145,11 +170,42 @@ mod tests {
             delta_slip: 1.0,
             f_min: 1.0,
             f_max: 3.0,
+            latch_slip: false,
         };
-        assert_eq!(law.desired(ContactEvent::Slip, Material::Metal).0, 3.0); // 4.5 → 3
-        assert_eq!(law.desired(ContactEvent::Contact, Material::Foam).0, 1.0); // 0.5 → 1
-        assert_eq!(law.desired(ContactEvent::Slip, Material::Foam).0, 1.5);
+        assert_eq!(law.desired(ContactEvent::Slip, Material::Metal, 1).0, 3.0); // 4.5 → 3
+        assert_eq!(law.desired(ContactEvent::Contact, Material::Foam, 0).0, 1.0); // 0.5 → 1
+        assert_eq!(law.desired(ContactEvent::Slip, Material::Foam, 1).0, 1.5);
         let bad = DesiredForceLaw { f_min: 4.0, ..law };
         assert_eq!(bad.validate("session").unwrap_err().field, "session.f_min");
+    }
+
+    /// The latch: each slip episode adds δf_s and the force stays raised through contact
+    /// without slip (2 + 0.5 = 2.5 after one episode, 3.0 after two, on plastic f_d^m = 2),
+    /// clipped at f_max (3.2); out of contact the finger goes back to f0 in position mode.
+    #[test]
+    fn a_latched_slip_ratchets_the_force_until_contact_is_lost() {
+        let law = DesiredForceLaw {
+            f0: 2.0,
+            delta_material: 0.5,
+            delta_slip: 0.5,
+            f_min: 0.0,
+            f_max: 3.2,
+            latch_slip: true,
+        };
+        let plastic = Material::Plastic;
+        assert_eq!(law.desired(ContactEvent::Contact, plastic, 0).0, 2.0);
+        assert_eq!(law.desired(ContactEvent::Slip, plastic, 1).0, 2.5);
+        assert_eq!(law.desired(ContactEvent::Contact, plastic, 1).0, 2.5);
+        assert_eq!(law.desired(ContactEvent::Contact, plastic, 2).0, 3.0);
+        assert_eq!(law.desired(ContactEvent::Slip, plastic, 3).0, 3.2);
+        // Metal's f_d^m is 2.5: one episode gives 3.0.
+        assert_eq!(
+            law.desired(ContactEvent::Contact, Material::Metal, 1).0,
+            3.0
+        );
+        assert_eq!(
+            law.desired(ContactEvent::NonContact, plastic, 2),
+            (2.0, ControlMode::Position)
+        );
     }
 }

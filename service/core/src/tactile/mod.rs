@@ -7,6 +7,7 @@
 //! real BioTac recordings. Plain Rust: no transport types.
 
 pub mod calibration;
+pub mod centroid_slip;
 pub mod desired_force;
 pub mod detector;
 pub mod force_estimation;

@@ -14,6 +14,7 @@
 //! (the GMM always finds a "highest" cluster, which on an untouched sensor is noise); the force
 //! estimate is always reported, it is the controller's feedback signal.
 
+use super::centroid_slip::{CentroidTracker, contact_centroid};
 use super::desired_force::{ControlMode, DesiredForceLaw};
 use super::detector::{
     ContactEvent, Detection, DetectorSample, EventDetector, Material, ModelFreeDetector,
@@ -63,6 +64,10 @@ pub enum DetectorChoice {
     Calibration(String),
 }
 
+/// With the latch ([`DesiredForceLaw::latch_slip`]), a slip that goes on counts as one more
+/// episode every this many seconds: an object still slipping at the raised force needs more.
+pub const LATCH_STEP_S: f64 = 0.1;
+
 /// Session parameters (issue 5 point 1).
 #[derive(Debug, Clone, PartialEq)]
 pub struct StabilizerConfig {
@@ -79,6 +84,10 @@ pub struct StabilizerConfig {
     /// Newtons per raw unit of Eq 6.7; `None` = raw units.
     pub calibration_gain: Option<f64>,
     pub detector: DetectorChoice,
+    /// Slip from the contact centroid's motion ([`super::centroid_slip`]): a finger in contact
+    /// whose centroid moves faster than this (mm/s) slips, whatever the detector says. `None`
+    /// (the default): slip is the detector's alone, as in the dissertation.
+    pub centroid_slip_mm_s: Option<f64>,
 }
 
 impl Default for StabilizerConfig {
@@ -92,6 +101,7 @@ impl Default for StabilizerConfig {
             alpha: 0.5,
             calibration_gain: None,
             detector: DetectorChoice::Default,
+            centroid_slip_mm_s: None,
         }
     }
 }
@@ -158,6 +168,14 @@ impl StabilizerConfig {
         if let DetectorChoice::ModelFree(t) = &self.detector {
             t.validate("session.detector")?;
         }
+        if let Some(v) = self.centroid_slip_mm_s
+            && !(v.is_finite() && v > 0.0)
+        {
+            return Err(FieldError::new(
+                "session.centroid_slip_mm_s",
+                format!("must be a positive number, got {v}"),
+            ));
+        }
         Ok(())
     }
 }
@@ -212,6 +230,13 @@ struct FingerState {
     detector: Box<dyn EventDetector>,
     last_detection: Option<Detection>,
     pid: Pid,
+    /// Slip episodes since this contact began (a slip lasting longer counts again every
+    /// [`LATCH_STEP_S`]), whether the last frame slipped, and when the count last rose (the
+    /// latch of [`DesiredForceLaw::latch_slip`]).
+    slip_episodes: u32,
+    slipping: bool,
+    raised_at: f64,
+    centroid: CentroidTracker,
 }
 
 /// A stabilization session (module doc).
@@ -288,6 +313,10 @@ impl Stabilizer {
                 detector,
                 last_detection: None,
                 pid: Pid::new(config.pid),
+                slip_episodes: 0,
+                slipping: false,
+                raised_at: f64::NEG_INFINITY,
+                centroid: CentroidTracker::default(),
                 config: f,
             })
             .collect();
@@ -404,11 +433,12 @@ impl Stabilizer {
         };
         let law = self.config.law;
         let estimator = self.estimator;
+        let moving = self.config.centroid_slip_mm_s;
         let results = self
             .fingers
             .iter_mut()
             .zip(&frame.fingers)
-            .map(|(f, r)| f.step(r, dt, &law, &estimator, unit))
+            .map(|(f, r)| f.step(r, (frame.timestamp, dt), &law, &estimator, unit, moving))
             .collect();
         Ok(FrameResult {
             timestamp: frame.timestamp,
@@ -450,14 +480,18 @@ fn analyze_session(mut s: Stabilizer, frames: &[Frame]) -> Result<Vec<FrameResul
 }
 
 impl FingerState {
+    /// One finger's frame (`at`: the frame's timestamp and the time step, s); `moving`: the
+    /// session's `centroid_slip_mm_s`.
     fn step(
         &mut self,
         r: &FingerReading,
-        dt: f64,
+        at: (f64, f64),
         law: &DesiredForceLaw,
         estimator: &ForceEstimator,
         unit: ForceUnit,
+        moving: Option<f64>,
     ) -> FingerResult {
+        let (timestamp, dt) = at;
         // Line 4: detection on t_seq (only once the baseline is complete).
         let (tared, sample) = self.source.next(r);
         let detection = if let Some(sample) = sample {
@@ -473,7 +507,23 @@ impl FingerState {
                 material_probabilities: None,
             }
         };
+        let mut detection = detection;
         let in_contact = detection.event != ContactEvent::NonContact;
+        // Slip the contact's motion shows (module doc of centroid_slip): the contact's and the
+        // slip's probabilities become slip's.
+        let speed = self.centroid.push(
+            timestamp,
+            in_contact
+                .then(|| contact_centroid(&self.config.layout, &tared.electrodes))
+                .flatten(),
+        );
+        if let (Some(limit), Some(v)) = (moving, speed)
+            && v > limit
+        {
+            let p = detection.event_probabilities;
+            detection.event = ContactEvent::Slip;
+            detection.event_probabilities = [p[0], 0.0, p[1] + p[2]];
+        }
         let (material, material_probabilities) = if in_contact {
             (detection.material, detection.material_probabilities)
         } else {
@@ -483,7 +533,16 @@ impl FingerState {
         let img = TactileImage::from_electrodes(&self.config.layout, &tared.electrodes);
         let psi = estimator.estimate(&img, &self.config.layout);
         // Lines 6–10.
-        let (desired_force, mode) = law.desired(detection.event, material);
+        match detection.event {
+            ContactEvent::NonContact => self.slip_episodes = 0,
+            ContactEvent::Slip if !self.slipping || timestamp - self.raised_at >= LATCH_STEP_S => {
+                self.slip_episodes += 1;
+                self.raised_at = timestamp;
+            }
+            _ => {}
+        }
+        self.slipping = detection.event == ContactEvent::Slip;
+        let (desired_force, mode) = law.desired(detection.event, material, self.slip_episodes);
         let setpoint = match mode {
             ControlMode::Position => {
                 self.pid.reset();

@@ -104,6 +104,7 @@ pub fn tactile_session_from_proto(
                 delta_slip: s.delta_slip.unwrap_or(d.law.delta_slip),
                 f_min: s.f_min.unwrap_or(d.law.f_min),
                 f_max: s.f_max.unwrap_or(d.law.f_max),
+                latch_slip: s.latch_slip.unwrap_or(d.law.latch_slip),
             },
             pid: PidGains {
                 kp: p.kp.unwrap_or(pd.kp),
@@ -116,6 +117,7 @@ pub fn tactile_session_from_proto(
             alpha: s.alpha.unwrap_or(d.alpha),
             calibration_gain: s.calibration_gain,
             detector,
+            centroid_slip_mm_s: s.centroid_slip_mm_s,
         },
     })
 }
@@ -198,6 +200,8 @@ pub fn tactile_session_to_proto(r: &TactileSessionRequest) -> pb::TactileSession
         delta_slip: Some(c.law.delta_slip),
         f_min: Some(c.law.f_min),
         f_max: Some(c.law.f_max),
+        latch_slip: Some(c.law.latch_slip),
+        centroid_slip_mm_s: c.centroid_slip_mm_s,
         pid: Some(pb::PidGains {
             kp: Some(c.pid.kp),
             ki: Some(c.pid.ki),

@@ -81,6 +81,14 @@ pub struct TactileSessionJson {
     pub alpha: Option<f64>,
     #[serde(default)]
     pub calibration_gain: Option<f64>,
+    /// Latched slip (a deviation from Eq 6.9, off by default): each slip episode (and each
+    /// further 0.1 s a slip lasts) raises f_d by delta_slip until contact is lost.
+    #[serde(default)]
+    pub latch_slip: Option<bool>,
+    /// Slip from the contact centroid's motion (not in the dissertation; unset: off): a finger
+    /// in contact whose electrode centroid moves faster than this, mm/s, slips.
+    #[serde(default)]
+    pub centroid_slip_mm_s: Option<f64>,
     #[serde(default)]
     #[schema(value_type = Option<DetectorDoc>)]
     pub detector: Option<DetectorJson>,
@@ -164,6 +172,12 @@ pub struct AnalyzeCsvQuery {
     /// A calibration (POST /v1/tactile/calibrations) as the detector.
     #[serde(default)]
     pub calibration: Option<String>,
+    /// Latched slip (see TactileSessionJson).
+    #[serde(default)]
+    pub latch_slip: Option<bool>,
+    /// Slip from the contact centroid's motion, mm/s (see TactileSessionJson).
+    #[serde(default)]
+    pub centroid_slip_mm_s: Option<f64>,
 }
 
 impl AnalyzeCsvQuery {
@@ -197,6 +211,8 @@ impl AnalyzeCsvQuery {
             pid,
             alpha: self.alpha,
             calibration_gain: self.calibration_gain,
+            latch_slip: self.latch_slip,
+            centroid_slip_mm_s: self.centroid_slip_mm_s,
             detector: self.calibration.map(DetectorJson::Calibration),
         }
     }
@@ -249,10 +265,12 @@ pub fn tactile_session_from_json(s: TactileSessionJson) -> TactileSessionRequest
                 delta_slip: s.delta_slip.unwrap_or(d.law.delta_slip),
                 f_min: s.f_min.unwrap_or(d.law.f_min),
                 f_max: s.f_max.unwrap_or(d.law.f_max),
+                latch_slip: s.latch_slip.unwrap_or(d.law.latch_slip),
             },
             pid: s.pid.unwrap_or(d.pid),
             alpha: s.alpha.unwrap_or(d.alpha),
             calibration_gain: s.calibration_gain,
+            centroid_slip_mm_s: s.centroid_slip_mm_s,
             detector: match s.detector {
                 None => d.detector,
                 Some(DetectorJson::ModelFree(t)) => DetectorChoice::ModelFree(t),
