@@ -6,7 +6,10 @@
 //! # Simulated sensor ([`SimBiotac`]), 100 Hz, already tared (`pretared`, rising electrodes)
 //! - pdc = [`PDC_PER_N`] · F_n, with F_n the pad's normal contact force on the object;
 //! - electrode i = [`ELECTRODE_PER_N`] · F_n · exp(−d_i² / 2σ²), d_i the electrode's distance
-//!   from the centre of the BioTac layout (σ = [`PATCH_SIGMA_MM`]);
+//!   from the pressed spot (σ = [`PATCH_SIGMA_MM`]): the centre of the BioTac layout where the
+//!   pad first touched the object, then moved as the contact point moves on the pad (its
+//!   displacement in the pad's frame, across the contact normal, in mm) — an object rolling
+//!   over the pad or sliding along it moves the spot;
 //! - pac: 22 samples of white noise with standard deviation [`PAC_PER_M_S`] · v_slip, v_slip the
 //!   tangential speed of the object relative to the pad at the contact (sliding excites the
 //!   skin; graspd's model-free detector reads the vibration);
@@ -28,7 +31,8 @@
 //! for another `pulse_s`; released, hold 1 s more. Held = off the
 //! table, touching the hand, centre of mass ≥ 3 cm above its start. In the stabilized run the
 //! session uses f0 as above, δf_s = f0 (slip doubles the force), δf_m = 0, the model-free
-//! detector, and the default window (l = 32, k = 3).
+//! detector, and the default window (l = 32, k = 3); f_max = `max_force` · f0, and the latch
+//! and the centroid slip as [`Disturbance`] asks (`make sim-stabilize` runs both ways).
 
 use crate::SimError;
 use crate::hand::SimHand;
@@ -40,6 +44,7 @@ use crate::trial::{
 use graspd_core::tactile::layout::SensorLayout;
 use graspd_proto::v1 as pb;
 use mujoco_rs::prelude::*;
+use nalgebra::Vector3;
 use rand::{RngExt, SeedableRng};
 use serde::Serialize;
 
@@ -57,29 +62,36 @@ pub const FORCE_LOOP_GAIN: f64 = 20.0;
 
 /// A simulated, pre-tared BioTac on one pad.
 pub struct SimBiotac {
-    weights: Vec<f64>,
+    electrodes: Vec<[f64; 2]>,
+    /// The layout's centre, mm: where the spot is before the contact moves.
+    centre: [f64; 2],
     rng: rand_chacha::ChaCha8Rng,
 }
 
 impl SimBiotac {
     pub fn new(layout: &SensorLayout, seed: u64) -> Self {
         let n = layout.electrodes.len() as f64;
-        let c = layout
+        let centre = layout
             .electrodes
             .iter()
             .fold([0.0, 0.0], |a, e| [a[0] + e[0] / n, a[1] + e[1] / n]);
-        let weights = layout
-            .electrodes
+        SimBiotac {
+            electrodes: layout.electrodes.clone(),
+            centre,
+            rng: rand_chacha::ChaCha8Rng::seed_from_u64(seed),
+        }
+    }
+
+    /// Each electrode's share of the normal force with the spot `moved` (mm) off the centre.
+    fn weights(&self, moved: [f64; 2]) -> Vec<f64> {
+        let c = [self.centre[0] + moved[0], self.centre[1] + moved[1]];
+        self.electrodes
             .iter()
             .map(|e| {
                 let d2 = (e[0] - c[0]).powi(2) + (e[1] - c[1]).powi(2);
                 (-d2 / (2.0 * PATCH_SIGMA_MM * PATCH_SIGMA_MM)).exp()
             })
-            .collect();
-        SimBiotac {
-            weights,
-            rng: rand_chacha::ChaCha8Rng::seed_from_u64(seed),
-        }
+            .collect()
     }
 
     /// A standard normal sample (Box–Muller).
@@ -89,11 +101,14 @@ impl SimBiotac {
         (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
     }
 
-    /// One frame for normal force `normal` (N) and slip speed `slip` (m/s).
-    pub fn reading(&mut self, normal: f64, slip: f64) -> pb::FingerReading {
+    /// One frame for normal force `normal` (N), slip speed `slip` (m/s) and the spot `moved`
+    /// (mm) from where the pad first touched.
+    pub fn reading(&mut self, normal: f64, slip: f64, moved: [f64; 2]) -> pb::FingerReading {
         let pdc = PDC_PER_N * normal + NOISE_COUNTS * self.gauss();
-        let electrodes = (0..self.weights.len())
-            .map(|i| ELECTRODE_PER_N * normal * self.weights[i] + NOISE_COUNTS * self.gauss())
+        let electrodes = self
+            .weights(moved)
+            .into_iter()
+            .map(|w| ELECTRODE_PER_N * normal * w + NOISE_COUNTS * self.gauss())
             .collect();
         let pac = (0..PAC_SAMPLES)
             .map(|_| (PAC_PER_M_S * slip + NOISE_COUNTS) * self.gauss())
@@ -161,16 +176,62 @@ pub struct DisturbanceRecord {
     pub slid_mm: f64,
 }
 
-/// Normal force on the object and slip speed at the contact for pad body `pad`.
-fn pad_state(trial: &Trial, pad: usize) -> (f64, f64) {
+/// What pad body `pad` feels: the normal force on the object, the slip speed at the contact,
+/// and (while it touches) the force-weighted contact point and normal in the pad's frame.
+struct PadState {
+    normal: f64,
+    slip: f64,
+    contact: Option<(Vector3<f64>, Vector3<f64>)>,
+}
+
+fn pad_state(trial: &Trial, pad: usize) -> PadState {
     let obj = trial.scene.object_bodies[0];
-    let mut normal = 0.0;
-    let mut slip: f64 = 0.0;
+    let (mut normal, mut slip) = (0.0, 0.0f64);
+    let (mut at, mut n) = (Vector3::zeros(), Vector3::zeros());
     for (i, _) in trial.hand_contacts_with_object().filter(|&(_, b)| b == pad) {
-        normal += trial.data.contact_force(i)[0].max(0.0);
+        let f = trial.data.contact_force(i)[0].max(0.0);
+        normal += f;
         slip = slip.max(crate::grip_reflex::contact_sliding(trial, i, obj, pad));
+        let c = &trial.data.contact()[i];
+        at += f * Vector3::from(c.pos);
+        n += f * Vector3::new(c.frame[0], c.frame[1], c.frame[2]);
     }
-    (normal, slip)
+    let contact = (normal > 1e-9).then(|| {
+        let x = trial.data.xpos()[pad];
+        let m = trial.data.xmat()[pad];
+        let r = nalgebra::Matrix3::from_row_slice(&m[..]);
+        let local = r.transpose() * (at / normal - Vector3::new(x[0], x[1], x[2]));
+        (local, (r.transpose() * n).normalize())
+    });
+    PadState {
+        normal,
+        slip,
+        contact,
+    }
+}
+
+/// Where the pressed spot has moved on a pad since it first touched, mm: the contact point's
+/// displacement in the pad's frame across the first contact's normal.
+#[derive(Default)]
+struct SpotTrack {
+    first: Option<(Vector3<f64>, Vector3<f64>, Vector3<f64>)>,
+}
+
+impl SpotTrack {
+    fn moved(&mut self, contact: Option<(Vector3<f64>, Vector3<f64>)>) -> [f64; 2] {
+        let Some((p, n)) = contact else {
+            return [0.0, 0.0];
+        };
+        let (p0, u, v) = *self.first.get_or_insert_with(|| {
+            let u = n
+                .cross(&Vector3::x())
+                .try_normalize(1e-6)
+                .unwrap_or_else(|| n.cross(&Vector3::y()).normalize());
+            (p, u, n.cross(&u))
+        });
+        let d = (p - p0) * 1e3;
+        [d.dot(&u), d.dot(&v)]
+    }
 }
 
 /// Drives the closing actuators as force sources toward actuator force `ft`.
@@ -323,6 +384,7 @@ pub fn run_disturbance_trial(
     let mut sensors: Vec<SimBiotac> = (0..pads.len())
         .map(|k| SimBiotac::new(&layout, seed * 31 + k as u64))
         .collect();
+    let mut spots: Vec<SpotTrack> = pads.iter().map(|_| SpotTrack::default()).collect();
     let dt = scene.model.ffi().opt.timestep;
     let frame_steps = (FRAME_S / dt).round() as usize;
     let ft_max = max_actuator_force(scene);
@@ -334,7 +396,7 @@ pub fn run_disturbance_trial(
     let obj = scene.object_bodies[0];
     // One control step: sensors and graspd at 100 Hz, the force loop every step.
     let mut control = |t: &mut Trial, out: &mut DisturbanceRecord| {
-        let states: Vec<(f64, f64)> = pads.iter().map(|&p| pad_state(t, p)).collect();
+        let states: Vec<PadState> = pads.iter().map(|&p| pad_state(t, p)).collect();
         if step_no.is_multiple_of(frame_steps)
             && let Some(s) = stream.as_mut()
         {
@@ -342,8 +404,10 @@ pub fn run_disturbance_trial(
                 timestamp: t.data.time(),
                 fingers: states
                     .iter()
-                    .zip(sensors.iter_mut())
-                    .map(|(&(n, v), sensor)| sensor.reading(n, v))
+                    .zip(sensors.iter_mut().zip(spots.iter_mut()))
+                    .map(|(s, (sensor, spot))| {
+                        sensor.reading(s.normal, s.slip, spot.moved(s.contact))
+                    })
                     .collect(),
             };
             match s.frame(frame) {
@@ -370,7 +434,7 @@ pub fn run_disturbance_trial(
             }
         }
         step_no += 1;
-        let mean = states.iter().map(|s| s.0).sum::<f64>() / states.len() as f64;
+        let mean = states.iter().map(|s| s.normal).sum::<f64>() / states.len() as f64;
         ft = (ft + FORCE_LOOP_GAIN * (command - mean) * dt).clamp(0.0, ft_max);
         apply_actuator_force(t, ft);
     };
@@ -543,22 +607,43 @@ mod tests {
     use super::*;
 
     /// The sensor model's gains, checked on its own readings: pdc and the central electrodes
-    /// scale with the normal force, pac's spread with the slip speed.
+    /// scale with the normal force, the electrodes' centroid moves with the spot, pac's spread
+    /// with the slip speed.
     #[test]
     fn simulated_biotac_scales_with_force_and_slip() {
         let layout = SensorLayout::biotac();
         let mut s = SimBiotac::new(&layout, 7);
         let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-        let pdc: Vec<f64> = (0..400).map(|_| s.reading(2.0, 0.0).pdc).collect();
+        let pdc: Vec<f64> = (0..400)
+            .map(|_| s.reading(2.0, 0.0, [0.0, 0.0]).pdc)
+            .collect();
         assert!((mean(&pdc) - 2.0 * PDC_PER_N).abs() < 0.3, "{}", mean(&pdc));
-        let r = s.reading(2.0, 0.0);
+        let r = s.reading(2.0, 0.0, [0.0, 0.0]);
         assert_eq!(r.electrodes.len(), layout.electrodes.len());
         let peak = r.electrodes.iter().cloned().fold(f64::MIN, f64::max);
         assert!(peak > 0.6 * 2.0 * ELECTRODE_PER_N && peak < 2.0 * ELECTRODE_PER_N + 5.0);
         let rms = |v: f64, s: &mut SimBiotac| {
-            let pac: Vec<f64> = (0..200).flat_map(|_| s.reading(1.0, v).pac).collect();
+            let pac: Vec<f64> = (0..200)
+                .flat_map(|_| s.reading(1.0, v, [0.0, 0.0]).pac)
+                .collect();
             (pac.iter().map(|x| x * x).sum::<f64>() / pac.len() as f64).sqrt()
         };
+        // The spot moved 5 mm along the layout's x: the pressure-weighted centroid of the
+        // electrodes (as graspd computes it) follows, and pdc does not change.
+        let mean_over = |moved: [f64; 2], s: &mut SimBiotac| {
+            let mut c = [0.0, 0.0];
+            for _ in 0..50 {
+                let e = s.reading(2.0, 0.0, moved).electrodes;
+                let p = graspd_core::tactile::centroid_slip::contact_centroid(&layout, &e).unwrap();
+                c = [c[0] + p[0] / 50.0, c[1] + p[1] / 50.0];
+            }
+            c
+        };
+        let (c0, c1) = (mean_over([0.0, 0.0], &mut s), mean_over([5.0, 0.0], &mut s));
+        assert!(
+            c1[0] - c0[0] > 2.0 && (c1[1] - c0[1]).abs() < 0.5,
+            "{c0:?} → {c1:?}"
+        );
         let still = rms(0.0, &mut s);
         let sliding = rms(0.01, &mut s);
         assert!((still - NOISE_COUNTS).abs() < 0.1, "{still}");
