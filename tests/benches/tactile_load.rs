@@ -52,6 +52,7 @@ fn session() -> pb::TactileSession {
             name: "th".into(),
             layout: LayoutChoice::Name("biotac".into()),
             tare: TareConfig::pretared(),
+            electrodes_only: false,
         }],
         config: StabilizerConfig::default(),
     })

@@ -39,6 +39,7 @@ fn session() -> pb::TactileSession {
             name: "th".into(),
             layout: LayoutChoice::Name("biotac".into()),
             tare: TareConfig::pretared(),
+            electrodes_only: false,
         }],
         config: StabilizerConfig::default(),
     })
@@ -292,6 +293,90 @@ async fn a_latched_slip_keeps_the_force_raised_until_contact_is_lost() {
         .map(|m| serde_json::to_value(convert::setpoint_from_proto(m).unwrap()).unwrap())
         .collect();
     assert_eq!(streamed, latched);
+}
+
+/// An electrodes-only finger (issue 16 part 3) on a real BioTac SP recording, which has only
+/// the 24 electrodes: JSON analyze takes frames with no pac at all, the gRPC stream frames with
+/// an empty pac, and both answer every frame alike, in contact once the baseline is complete;
+/// the same frames on an ordinary finger are refused naming the pac.
+#[tokio::test]
+async fn an_electrodes_only_finger_runs_on_a_real_biotac_sp_recording() {
+    let server = Server::start();
+    let path = graspd_testkit::testdata_dir().join("tactile/biotac_sp/dos_basic/n/case122.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let frames: Vec<Frame> = text
+        .lines()
+        .skip(1)
+        .enumerate()
+        .map(|(k, line)| Frame {
+            timestamp: 0.01 * k as f64,
+            fingers: vec![graspd_core::tactile::FingerReading {
+                electrodes: line.split(',').map(|v| v.trim().parse().unwrap()).collect(),
+                ..Default::default()
+            }],
+        })
+        .collect();
+    let finger = |electrodes_only: bool| {
+        serde_json::json!({"name": "ff", "layout": "biotac_sp", "electrodes_only": electrodes_only,
+                           "tare": {"baseline_frames": 50}})
+    };
+    let json_frames: Vec<serde_json::Value> = frames
+        .iter()
+        .map(|f| {
+            serde_json::json!({"timestamp": f.timestamp, "fingers": [{
+                "pdc": 0, "tdc": 0, "tac": 0, "electrodes": f.fingers[0].electrodes}]})
+        })
+        .collect();
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze"))
+        .json(&serde_json::json!({"session": {"fingers": [finger(true)]}, "frames": json_frames}))
+        .send()
+        .await
+        .unwrap();
+    let analyzed = analyzed_frames(response).await;
+    assert_eq!(analyzed.len(), frames.len());
+    let touching = analyzed[60..]
+        .iter()
+        .filter(|f| f["fingers"][0]["event"] != "non_contact")
+        .count();
+    assert!(
+        touching > 150,
+        "{touching} of {} frames in contact",
+        analyzed.len() - 60
+    );
+
+    let mut session = pb::TactileSession::default();
+    session.fingers.push(pb::TactileFinger {
+        name: "ff".into(),
+        layout: Some(pb::tactile_finger::Layout::LayoutName("biotac_sp".into())),
+        tare: Some(pb::TareSettings {
+            baseline_frames: Some(50),
+            ..Default::default()
+        }),
+        electrodes_only: true,
+    });
+    let open = open(&server, session).await.expect("session opens");
+    let (answers, end) = exchange(open, &frames).await;
+    assert!(end.is_none(), "{end:?}");
+    let streamed: Vec<serde_json::Value> = answers
+        .into_iter()
+        .map(|m| serde_json::to_value(convert::setpoint_from_proto(m).unwrap()).unwrap())
+        .collect();
+    assert_eq!(streamed, analyzed);
+
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze"))
+        .json(&serde_json::json!({"session": {"fingers": [finger(false)]},
+                                  "frames": &json_frames[..3]}))
+        .send()
+        .await
+        .unwrap();
+    let (status, _, field, message) = rest_error(response).await;
+    assert_eq!(
+        (status, field.as_deref()),
+        (400, Some("frames[0].fingers[0].pac"))
+    );
+    assert!(message.contains("electrodes_only"), "{message}");
 }
 
 #[tokio::test]

@@ -295,6 +295,7 @@ async fn bad_calibrations_and_sessions_that_do_not_fit_are_refused_naming_the_fi
                     pretared: true,
                     ..Default::default()
                 }),
+                electrodes_only: false,
             }],
             detector: Some(pb::TactileDetector {
                 kind: Some(pb::tactile_detector::Kind::Calibration("nope".into())),

@@ -90,6 +90,10 @@ pub struct StabilizeArgs {
     /// moves faster than this (mm/s) slips.
     #[arg(long, value_name = "MM_S")]
     centroid_slip_mm_s: Option<f64>,
+    /// The sensor gives only its electrodes: pdc, pac, tdc and tac are not read; slip comes
+    /// from the contact centroid's motion.
+    #[arg(long)]
+    electrodes_only: bool,
     /// Print no live line, only the summary.
     #[arg(long)]
     quiet: bool,
@@ -125,6 +129,7 @@ impl StabilizeArgs {
             calibration: self.calibration.clone(),
             latch_slip: self.latch_slip.then_some(true),
             centroid_slip_mm_s: self.centroid_slip_mm_s,
+            electrodes_only: self.electrodes_only,
         };
         convert::tactile_session_to_proto(&json::tactile_session_from_json(query.session()))
     }

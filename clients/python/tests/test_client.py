@@ -261,6 +261,16 @@ def test_the_session_options_beyond_eq_6_9_reach_the_server(server):
     assert field_of(e.value) == "session.centroid_slip_mm_s"
 
 
+def test_an_electrodes_only_finger_needs_no_pac(server):
+    with Client(server.grpc) as c:
+        with c.stabilizer([Finger("ff", layout="biotac_sp", electrodes_only=True)]) as s:
+            answers = [s.step(0.01 * t, [Reading(pdc=0.0, pac=[], tdc=0.0, tac=0.0,
+                                                 electrodes=[3000.0 - (150.0 if t > 60 else 0.0)] * 24)])
+                       for t in range(80)]
+    assert answers[-1].fingers[0].tared
+    assert answers[-1].fingers[0].event != tactile_pb2.CONTACT_EVENT_NON_CONTACT
+
+
 def test_a_frame_out_of_order_ends_the_session_naming_the_field(server):
     with Client(server.grpc) as c:
         with c.stabilizer([Finger("th", pretared=True)]) as s:

@@ -353,6 +353,7 @@ pub fn run_disturbance_trial(
                 electrode_polarity: pb::ElectrodePolarity::Rising as i32,
                 ..Default::default()
             }),
+            electrodes_only: false,
         };
         Some(
             service.stabilize(pb::TactileSession {
@@ -634,7 +635,8 @@ mod tests {
             let mut c = [0.0, 0.0];
             for _ in 0..50 {
                 let e = s.reading(2.0, 0.0, moved).electrodes;
-                let p = graspd_core::tactile::centroid_slip::contact_centroid(&layout, &e).unwrap();
+                let p = graspd_core::tactile::centroid_slip::contact_centroid(&layout, &e, None)
+                    .unwrap();
                 c = [c[0] + p[0] / 50.0, c[1] + p[1] / 50.0];
             }
             c

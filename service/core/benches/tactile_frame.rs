@@ -112,6 +112,7 @@ fn measure(label: &str, fingers: usize, tare: TareConfig, input: &[Frame], model
     let config = StabilizerConfig::for_fingers(
         (0..fingers)
             .map(|f| FingerConfig {
+                electrodes_only: false,
                 name: format!("f{f}"),
                 layout: SensorLayout::biotac(),
                 tare,

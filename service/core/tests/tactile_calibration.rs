@@ -135,6 +135,7 @@ fn a_calibration_on_other_recordings_tells_the_materials() {
     for s in &test {
         let config = StabilizerConfig {
             fingers: vec![FingerConfig {
+                electrodes_only: false,
                 name: "biotac".into(),
                 layout: layout.clone(),
                 tare: TareConfig::pretared(),

@@ -56,6 +56,7 @@ fn fixture_dir() -> PathBuf {
 /// `pretared` = TareConfig::pretared().
 fn session(style: &str) -> StabilizerConfig {
     StabilizerConfig::for_fingers(vec![FingerConfig {
+        electrodes_only: false,
         name: "ff".into(),
         layout: SensorLayout::biotac(),
         tare: if style == "raw" {

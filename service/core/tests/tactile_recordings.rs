@@ -60,6 +60,7 @@ fn model_free_detector_on_real_recordings() {
                 .expect("recording parses");
             let labels = rec.labels.clone().expect("labels");
             let config = StabilizerConfig::for_fingers(vec![FingerConfig {
+                electrodes_only: false,
                 name: "ff".into(),
                 layout: SensorLayout::biotac(),
                 // These recordings are baseline-subtracted and clipped upstream.
@@ -208,6 +209,7 @@ fn lstm_model_on_real_recordings() {
                 .expect("recording parses");
             let labels = rec.labels.clone().expect("labels");
             let config = StabilizerConfig::for_fingers(vec![FingerConfig {
+                electrodes_only: false,
                 name: "ff".into(),
                 layout: SensorLayout::biotac(),
                 tare: TareConfig::pretared(),

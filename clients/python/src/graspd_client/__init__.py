@@ -238,12 +238,15 @@ def _vec3(v) -> common_pb2.Vec3:
 
 @dataclass
 class Finger:
-    """One finger of a tactile session: a built-in layout name ("biotac", "biotac_sp")."""
+    """One finger of a tactile session: a built-in layout name ("biotac", "biotac_sp").
+    ``electrodes_only``: the sensor gives only its electrodes (send pac=[] and zeros for pdc,
+    tdc, tac); slip then comes from the contact centroid's motion."""
 
     name: str
     layout: str = "biotac"
     pretared: bool = False
     baseline_frames: Optional[int] = None
+    electrodes_only: bool = False
 
 
 @dataclass
@@ -452,7 +455,8 @@ class Client:
         centroid moves faster than this)."""
         session = tactile_pb2.TactileSession()
         for f in fingers:
-            finger = session.fingers.add(name=f.name, layout_name=f.layout)
+            finger = session.fingers.add(name=f.name, layout_name=f.layout,
+                                         electrodes_only=f.electrodes_only)
             finger.tare.pretared = f.pretared
             if f.baseline_frames is not None:
                 finger.tare.baseline_frames = f.baseline_frames

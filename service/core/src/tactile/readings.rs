@@ -49,6 +49,11 @@ impl SampleSource {
         self.tare.is_ready()
     }
 
+    /// The electrodes' noise over the baseline (`Tare::electrode_noise`).
+    pub fn electrode_noise(&self) -> Option<f64> {
+        self.tare.electrode_noise()
+    }
+
     /// The reading tared, and its detector sample when the baseline was complete before it.
     pub fn next(&mut self, r: &FingerReading) -> (TaredReading, Option<DetectorSample>) {
         let was_ready = self.tare.is_ready();
@@ -57,7 +62,8 @@ impl SampleSource {
         self.prev_single_pac = (r.pac.len() == 1).then(|| r.pac[0]);
         let sample = was_ready.then(|| DetectorSample {
             pdc: tared.pdc,
-            pac: r.pac.iter().sum::<f64>() / r.pac.len() as f64,
+            // No pac channel (an electrodes-only sensor): level 0.
+            pac: r.pac.iter().sum::<f64>() / r.pac.len().max(1) as f64,
             pac_vibration: vibration,
             pac_samples: r.pac.clone(),
             tdc: tared.tdc,

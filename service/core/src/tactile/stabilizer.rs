@@ -44,7 +44,18 @@ pub struct FingerConfig {
     pub name: String,
     pub layout: SensorLayout,
     pub tare: TareConfig,
+    /// The sensor gives only its electrodes (a BioTac SP read through its electrodes, a
+    /// capacitive pad; issue 16 part 3): its frames may send no pac, and pdc, tdc and tac are
+    /// not read. Contact then comes from the electrodes alone and slip from the contact
+    /// centroid's motion ([`super::centroid_slip`], at the session's `centroid_slip_mm_s`, else
+    /// [`ELECTRODE_SLIP_MM_S`]); the model-free detector decides.
+    pub electrodes_only: bool,
 }
+
+/// The centroid speed at which an electrodes-only finger slips when the session sets none,
+/// mm/s (`make sim-stabilize`: 20 catches objects rolling out of a pinch; 40 and 80 let one and
+/// two of 63 go).
+pub const ELECTRODE_SLIP_MM_S: f64 = 20.0;
 
 /// Which detector produces the contact event and material.
 #[derive(Debug, Clone, PartialEq)]
@@ -388,11 +399,11 @@ impl Stabilizer {
                     ),
                 ));
             }
-            if r.pac.is_empty() || r.pac.len() > MAX_PAC_SAMPLES {
+            if (r.pac.is_empty() && !f.config.electrodes_only) || r.pac.len() > MAX_PAC_SAMPLES {
                 return Err(FieldError::new(
                     format!("frame.fingers[{i}].pac"),
                     format!(
-                        "{} values; send one value or the driver's samples (22 for a BioTac), at most {MAX_PAC_SAMPLES}",
+                        "{} values; send one value or the driver's samples (22 for a BioTac), at most {MAX_PAC_SAMPLES} (none: declare the finger electrodes_only)",
                         r.pac.len()
                     ),
                 ));
@@ -492,6 +503,18 @@ impl FingerState {
         moving: Option<f64>,
     ) -> FingerResult {
         let (timestamp, dt) = at;
+        // An electrodes-only sensor's other channels are not read (FingerConfig).
+        let electrodes_only;
+        let r = if self.config.electrodes_only {
+            electrodes_only = FingerReading {
+                electrodes: r.electrodes.clone(),
+                ..FingerReading::default()
+            };
+            &electrodes_only
+        } else {
+            r
+        };
+        let moving = moving.or(self.config.electrodes_only.then_some(ELECTRODE_SLIP_MM_S));
         // Line 4: detection on t_seq (only once the baseline is complete).
         let (tared, sample) = self.source.next(r);
         let detection = if let Some(sample) = sample {
@@ -514,7 +537,10 @@ impl FingerState {
         let speed = self.centroid.push(
             timestamp,
             in_contact
-                .then(|| contact_centroid(&self.config.layout, &tared.electrodes))
+                .then(|| {
+                    let noise = self.source.electrode_noise();
+                    contact_centroid(&self.config.layout, &tared.electrodes, noise)
+                })
                 .flatten(),
         );
         if let (Some(limit), Some(v)) = (moving, speed)
@@ -576,6 +602,7 @@ mod tests {
 
     fn finger(name: &str, layout: SensorLayout) -> FingerConfig {
         FingerConfig {
+            electrodes_only: false,
             name: name.into(),
             layout,
             tare: TareConfig {

@@ -90,6 +90,8 @@ pub struct TaredReading {
 pub struct Tare {
     config: TareConfig,
     sum: Vec<f64>,
+    /// Sum of squares of the electrodes over the baseline (their noise).
+    sum_sq: Vec<f64>,
     count: usize,
 }
 
@@ -98,6 +100,7 @@ impl Tare {
         Self {
             config,
             sum: vec![0.0; 3 + electrodes],
+            sum_sq: vec![0.0; electrodes],
             count: 0,
         }
     }
@@ -110,6 +113,23 @@ impl Tare {
         }
     }
 
+    /// The electrodes' noise over the baseline: the root mean square of their standard
+    /// deviations, raw units; None without a baseline of two or more frames (pretared data).
+    pub fn electrode_noise(&self) -> Option<f64> {
+        let n = self.count as f64;
+        if self.count < 2 || self.sum_sq.is_empty() {
+            return None;
+        }
+        let var: f64 = self
+            .sum_sq
+            .iter()
+            .zip(&self.sum[3..])
+            .map(|(sq, s)| ((sq - s * s / n) / (n - 1.0)).max(0.0))
+            .sum::<f64>()
+            / self.sum_sq.len() as f64;
+        Some(var.sqrt())
+    }
+
     /// Feeds one raw reading (into the baseline while it is being collected) and returns it tared.
     pub fn apply(&mut self, pdc: f64, tdc: f64, tac: f64, electrodes: &[f64]) -> TaredReading {
         let raw = || {
@@ -120,6 +140,9 @@ impl Tare {
         if !self.is_ready() {
             for (s, v) in self.sum.iter_mut().zip(raw()) {
                 *s += v;
+            }
+            for (s, v) in self.sum_sq.iter_mut().zip(electrodes) {
+                *s += v * v;
             }
             self.count += 1;
         }
@@ -174,5 +197,27 @@ mod tests {
             (r.pdc, r.tdc, r.tac, r.electrodes[0]),
             (30.0, 1.0, 2.0, 40.0)
         );
+    }
+
+    /// The baseline's electrode noise: electrode 0 alternates 3000 ± 2 (sample std 2.31 over
+    /// four frames), electrode 1 is still; RMS over the two = 2.31/√2.
+    #[test]
+    fn the_baseline_measures_the_electrodes_noise() {
+        let mut t = Tare::new(
+            TareConfig {
+                baseline: Baseline::FirstFrames(4),
+                electrode_polarity: ElectrodePolarity::Falling,
+            },
+            2,
+        );
+        assert_eq!(t.electrode_noise(), None);
+        for k in 0..4 {
+            let e0 = if k % 2 == 0 { 3002.0 } else { 2998.0 };
+            t.apply(0.0, 0.0, 0.0, &[e0, 3100.0]);
+        }
+        let sd0 = (16.0_f64 / 3.0).sqrt();
+        let want = (sd0 * sd0 / 2.0).sqrt();
+        assert!((t.electrode_noise().unwrap() - want).abs() < 1e-9);
+        assert_eq!(Tare::new(TareConfig::pretared(), 2).electrode_noise(), None);
     }
 }

@@ -197,6 +197,16 @@ impl GraspService {
             .into());
         }
         for (i, f) in config.fingers.iter().enumerate() {
+            if f.electrodes_only {
+                return Err(FieldError::new(
+                    format!("session.fingers[{i}].electrodes_only"),
+                    format!(
+                        "calibration '{name}' reads pdc, pac and the thermal channels; an \
+                         electrodes-only finger needs model_free"
+                    ),
+                )
+                .into());
+            }
             if f.layout.electrode_count() != cal.electrodes {
                 return Err(FieldError::new(
                     format!("session.fingers[{i}].layout"),

@@ -25,6 +25,8 @@ pub struct TactileFingerRequest {
     pub name: String,
     pub layout: LayoutChoice,
     pub tare: TareConfig,
+    /// The sensor gives only its electrodes (`FingerConfig::electrodes_only`).
+    pub electrodes_only: bool,
 }
 
 /// A session request in domain terms, as both transports produce it: `config` holds every
@@ -108,6 +110,7 @@ impl GraspService {
                     name: f.name,
                     layout,
                     tare: f.tare,
+                    electrodes_only: f.electrodes_only,
                 })
             })
             .collect::<Result<_, FieldError>>()?;
@@ -263,6 +266,13 @@ fn tactile_fit(config: &StabilizerConfig, m: &TactileModel) -> Result<(), FieldE
         ));
     }
     for (i, f) in config.fingers.iter().enumerate() {
+        if f.electrodes_only {
+            return Err(FieldError::new(
+                format!("session.fingers[{i}].electrodes_only"),
+                "the tactile model reads pdc, pac and the thermal channels; an electrodes-only \
+                 finger needs model_free",
+            ));
+        }
         if f.layout.electrode_count() != m.electrode_count() {
             return Err(FieldError::new(
                 format!("session.fingers[{i}].layout"),
@@ -290,6 +300,7 @@ mod tests {
                 name: "th".into(),
                 layout,
                 tare: TareConfig::pretared(),
+                electrodes_only: false,
             }],
             config: StabilizerConfig::default(),
         }

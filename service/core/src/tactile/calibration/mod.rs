@@ -405,6 +405,7 @@ mod tests {
         for (bin, want) in [(5.0, Material::Foam), (30.0, Material::Metal)] {
             let config = StabilizerConfig {
                 fingers: vec![FingerConfig {
+                    electrodes_only: false,
                     name: "ff".into(),
                     layout: layout.clone(),
                     tare: TareConfig::pretared(),

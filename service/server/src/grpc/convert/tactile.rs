@@ -73,6 +73,7 @@ pub fn tactile_session_from_proto(
                 name: f.name,
                 layout,
                 tare,
+                electrodes_only: f.electrodes_only,
             })
         })
         .collect::<Result<Vec<_>, FieldError>>()?;
@@ -191,6 +192,7 @@ pub fn tactile_session_to_proto(r: &TactileSessionRequest) -> pb::TactileSession
                     }),
                 }),
                 tare: Some(tare_to_proto(&f.tare)),
+                electrodes_only: f.electrodes_only,
             })
             .collect(),
         window_length: Some(c.window_length.min(u32::MAX as usize) as u32),

@@ -42,6 +42,10 @@ pub struct TactileFingerJson {
     pub layout: LayoutJson,
     #[serde(default)]
     pub tare: Option<TareJson>,
+    /// The sensor gives only its electrodes: frames may send `"pac": []`, and pdc, tdc and tac
+    /// are not read; contact from the electrodes, slip from the contact centroid's motion.
+    #[serde(default)]
+    pub electrodes_only: bool,
 }
 
 /// `{"model_free": {thresholds…}}`, `{"model": "name"}` or `{"calibration": "name"}`.
@@ -102,10 +106,16 @@ pub enum PacJson {
     Samples(Vec<f64>),
 }
 
+fn no_pac() -> PacJson {
+    PacJson::Samples(Vec::new())
+}
+
 #[derive(Debug, Clone, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FingerReadingJson {
     pub pdc: f64,
+    /// Absent or `[]` only for an electrodes-only finger.
+    #[serde(default = "no_pac")]
     pub pac: PacJson,
     pub tdc: f64,
     pub tac: f64,
@@ -178,6 +188,9 @@ pub struct AnalyzeCsvQuery {
     /// Slip from the contact centroid's motion, mm/s (see TactileSessionJson).
     #[serde(default)]
     pub centroid_slip_mm_s: Option<f64>,
+    /// The finger's sensor gives only its electrodes (see TactileFingerJson).
+    #[serde(default)]
+    pub electrodes_only: bool,
 }
 
 impl AnalyzeCsvQuery {
@@ -200,6 +213,7 @@ impl AnalyzeCsvQuery {
                     pretared: self.pretared,
                     electrode_polarity: self.electrode_polarity,
                 }),
+                electrodes_only: self.electrodes_only,
             }],
             window_length: self.window_length,
             stride: self.stride,
@@ -253,6 +267,7 @@ pub fn tactile_session_from_json(s: TactileSessionJson) -> TactileSessionRequest
                     LayoutJson::Custom(spec) => LayoutChoice::Custom(spec),
                 },
                 tare: tare_from_json(f.tare),
+                electrodes_only: f.electrodes_only,
             })
             .collect(),
         config: StabilizerConfig {
