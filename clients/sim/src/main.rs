@@ -120,6 +120,10 @@ enum Command {
         /// (`centroid_slip_mm_s`; unset: off).
         #[arg(long, value_name = "MM_S")]
         centroid_slip: Option<f64>,
+        /// The pads' sensors as electrodes-only fingers: graspd gets no pac, pdc or thermal
+        /// channel.
+        #[arg(long)]
+        electrodes_only: bool,
         #[arg(long, default_value = "sim-results")]
         out: PathBuf,
     },
@@ -285,6 +289,7 @@ fn real_main() -> Result<(), SimError> {
             max_force,
             latch_slip,
             centroid_slip,
+            electrodes_only,
             out,
         } => {
             let hand = SimHand::load(&hand, &hands_dir)?;
@@ -297,6 +302,7 @@ fn real_main() -> Result<(), SimError> {
                 max_force: max_force.unwrap_or(1.0 + slip_gain),
                 latch_slip,
                 centroid_slip_mm_s: centroid_slip,
+                electrodes_only,
             };
             let report = graspd_sim::tactile::run_protocol(
                 &hand,

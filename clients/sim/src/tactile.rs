@@ -139,6 +139,9 @@ pub struct Disturbance {
     pub latch_slip: bool,
     /// The session's slip from the contact centroid's motion, mm/s (`centroid_slip_mm_s`).
     pub centroid_slip_mm_s: Option<f64>,
+    /// The pads' sensors as electrodes-only fingers (`electrodes_only`: no pac, pdc or thermal
+    /// channel reaches graspd).
+    pub electrodes_only: bool,
 }
 
 impl Default for Disturbance {
@@ -151,6 +154,7 @@ impl Default for Disturbance {
             max_force: 2.0,
             latch_slip: false,
             centroid_slip_mm_s: None,
+            electrodes_only: false,
         }
     }
 }
@@ -353,7 +357,7 @@ pub fn run_disturbance_trial(
                 electrode_polarity: pb::ElectrodePolarity::Rising as i32,
                 ..Default::default()
             }),
-            electrodes_only: false,
+            electrodes_only: dist.electrodes_only,
         };
         Some(
             service.stabilize(pb::TactileSession {
@@ -586,9 +590,15 @@ pub fn run_protocol(
         } else {
             "Eq 6.9 as printed (no latch)"
         },
-        match dist.centroid_slip_mm_s {
-            Some(v) => format!("slip also from the contact centroid moving faster than {v} mm/s"),
-            None => "slip from the detector alone".to_string(),
+        match (dist.centroid_slip_mm_s, dist.electrodes_only) {
+            (v, true) => format!(
+                "electrodes-only sensors (slip from the contact centroid moving faster than {} mm/s)",
+                v.unwrap_or(graspd_core::tactile::stabilizer::ELECTRODE_SLIP_MM_S)
+            ),
+            (Some(v), false) => {
+                format!("slip also from the contact centroid moving faster than {v} mm/s")
+            }
+            (None, false) => "slip from the detector alone".to_string(),
         }
     );
     std::fs::create_dir_all(out)
