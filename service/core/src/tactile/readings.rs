@@ -34,6 +34,9 @@ pub struct Frame {
 pub struct SampleSource {
     tare: Tare,
     prev_single_pac: Option<f64>,
+    /// Only the electrodes are read (`FingerConfig::electrodes_only`): pdc, tdc, tac and pac
+    /// count as 0 and no pac.
+    electrodes_only: bool,
 }
 
 impl SampleSource {
@@ -41,6 +44,15 @@ impl SampleSource {
         Self {
             tare: Tare::new(tare, electrodes),
             prev_single_pac: None,
+            electrodes_only: false,
+        }
+    }
+
+    /// The same source reading only the electrodes of each reading.
+    pub fn electrodes_only(self, electrodes_only: bool) -> Self {
+        Self {
+            electrodes_only,
+            ..self
         }
     }
 
@@ -57,15 +69,20 @@ impl SampleSource {
     /// The reading tared, and its detector sample when the baseline was complete before it.
     pub fn next(&mut self, r: &FingerReading) -> (TaredReading, Option<DetectorSample>) {
         let was_ready = self.tare.is_ready();
-        let tared = self.tare.apply(r.pdc, r.tdc, r.tac, &r.electrodes);
-        let vibration = pac_vibration(&r.pac, self.prev_single_pac);
-        self.prev_single_pac = (r.pac.len() == 1).then(|| r.pac[0]);
+        let (pdc, tdc, tac, pac) = if self.electrodes_only {
+            (0.0, 0.0, 0.0, &[][..])
+        } else {
+            (r.pdc, r.tdc, r.tac, &r.pac[..])
+        };
+        let tared = self.tare.apply(pdc, tdc, tac, &r.electrodes);
+        let vibration = pac_vibration(pac, self.prev_single_pac);
+        self.prev_single_pac = (pac.len() == 1).then(|| pac[0]);
         let sample = was_ready.then(|| DetectorSample {
             pdc: tared.pdc,
             // No pac channel (an electrodes-only sensor): level 0.
-            pac: r.pac.iter().sum::<f64>() / r.pac.len().max(1) as f64,
+            pac: pac.iter().sum::<f64>() / pac.len().max(1) as f64,
             pac_vibration: vibration,
-            pac_samples: r.pac.clone(),
+            pac_samples: pac.to_vec(),
             tdc: tared.tdc,
             tac: tared.tac,
             electrodes: tared.electrodes.clone(),

@@ -319,7 +319,8 @@ impl Stabilizer {
             .cloned()
             .zip(detectors)
             .map(|(f, detector)| FingerState {
-                source: SampleSource::new(f.tare, f.layout.electrode_count()),
+                source: SampleSource::new(f.tare, f.layout.electrode_count())
+                    .electrodes_only(f.electrodes_only),
                 sampler: WindowSampler::new(config.window_length, config.stride),
                 detector,
                 last_detection: None,
@@ -503,21 +504,10 @@ impl FingerState {
         moving: Option<f64>,
     ) -> FingerResult {
         let (timestamp, dt) = at;
-        // An electrodes-only sensor's other channels are not read (FingerConfig).
-        let electrodes_only;
-        let r = if self.config.electrodes_only {
-            electrodes_only = FingerReading {
-                electrodes: r.electrodes.clone(),
-                ..FingerReading::default()
-            };
-            &electrodes_only
-        } else {
-            r
-        };
         let moving = moving.or(self.config.electrodes_only.then_some(ELECTRODE_SLIP_MM_S));
         // Line 4: detection on t_seq (only once the baseline is complete).
         let (tared, sample) = self.source.next(r);
-        let detection = if let Some(sample) = sample {
+        let mut detection = if let Some(sample) = sample {
             if self.sampler.push(sample) || self.last_detection.is_none() {
                 self.last_detection = Some(self.detector.detect(self.sampler.window()));
             }
@@ -530,20 +520,19 @@ impl FingerState {
                 material_probabilities: None,
             }
         };
-        let mut detection = detection;
         let in_contact = detection.event != ContactEvent::NonContact;
-        // Slip the contact's motion shows (module doc of centroid_slip): the contact's and the
-        // slip's probabilities become slip's.
-        let speed = self.centroid.push(
-            timestamp,
-            in_contact
-                .then(|| {
-                    let noise = self.source.electrode_noise();
-                    contact_centroid(&self.config.layout, &tared.electrodes, noise)
-                })
-                .flatten(),
-        );
-        if let (Some(limit), Some(v)) = (moving, speed)
+        // Slip the contact's motion shows (module doc of centroid_slip), tracked only when the
+        // session asks for it: the contact's and the slip's probabilities become slip's.
+        if let Some(limit) = moving
+            && let Some(v) = self.centroid.push(
+                timestamp,
+                in_contact
+                    .then(|| {
+                        let noise = self.source.electrode_noise();
+                        contact_centroid(&self.config.layout, &tared.electrodes, noise)
+                    })
+                    .flatten(),
+            )
             && v > limit
         {
             let p = detection.event_probabilities;
