@@ -241,8 +241,11 @@ def main():
     head = ExportHead(net).eval()
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
     dummy = torch.from_numpy(xtn[:1])
+    # A dynamic batch axis: graspd runs the windows of sessions due together in one run.
+    batch = {0: "batch"}
     torch.onnx.export(head, (dummy,), args.out, input_names=["window"],
-                      output_names=["event_logits", "material_logits"], opset_version=17, dynamo=False)
+                      output_names=["event_logits", "material_logits"], opset_version=17, dynamo=False,
+                      dynamic_axes={"window": batch, "event_logits": batch, "material_logits": batch})
     model = onnx.load(args.out)
     meta = {
         "graspd.tactile.features": ",".join(sim.FEATURES),

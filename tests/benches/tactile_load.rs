@@ -12,11 +12,17 @@
 //! cargo build --release --bins
 //! cargo bench -p graspd-e2e --bench tactile_load                      # 1, 5, 10, 25, 50 sessions
 //! cargo bench -p graspd-e2e --bench tactile_load -- --sessions 50 --rate 1000 --seconds 10
+//! cargo bench -p graspd-e2e --bench tactile_load -- --rate 100 --staggered
+//! cargo bench -p graspd-e2e --bench tactile_load -- --model-free
 //! ```
+//!
+//! By default every session's frame is due at the same instant (the worst case: a burst of N
+//! frames each period); `--staggered` spreads session i's schedule i/N of a period later, as
+//! independent clients would be.
 
 use graspd::facade::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
 use graspd::grpc::convert;
-use graspd_core::tactile::{Frame, Recording, StabilizerConfig, TareConfig};
+use graspd_core::tactile::{DetectorChoice, Frame, Recording, StabilizerConfig, TareConfig};
 use graspd_e2e::{Server, bench_arg, release_graspd};
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::stabilize_request::Kind;
@@ -34,6 +40,11 @@ struct Run {
     rate_hz: f64,
     seconds: f64,
     warmup_s: f64,
+    /// Whether the sessions' frames are spread over the period (independent clients) instead
+    /// of all due at the same instant.
+    staggered: bool,
+    /// Whether the sessions ask for the model-free detector (else the default: the shipped LSTM).
+    model_free: bool,
 }
 
 struct Outcome {
@@ -46,7 +57,7 @@ struct Outcome {
     measured_s: f64,
 }
 
-fn session() -> pb::TactileSession {
+fn session(model_free: bool) -> pb::TactileSession {
     convert::tactile_session_to_proto(&TactileSessionRequest {
         fingers: vec![TactileFingerRequest {
             name: "th".into(),
@@ -54,7 +65,14 @@ fn session() -> pb::TactileSession {
             tare: TareConfig::pretared(),
             electrodes_only: false,
         }],
-        config: StabilizerConfig::default(),
+        config: StabilizerConfig {
+            detector: if model_free {
+                DetectorChoice::ModelFree(Default::default())
+            } else {
+                DetectorChoice::Default
+            },
+            ..StabilizerConfig::default()
+        },
     })
 }
 
@@ -93,7 +111,7 @@ async fn one_session(
     let (sent_tx, mut sent_rx) = mpsc::unbounded_channel::<(Instant, Instant)>();
     let _ = tx
         .send(pb::StabilizeRequest {
-            kind: Some(Kind::Session(session())),
+            kind: Some(Kind::Session(session(run.model_free))),
         })
         .await;
     let sender = tokio::spawn(async move {
@@ -155,8 +173,22 @@ fn measure(server: &Server, frames: &Arc<Vec<Frame>>, run: Run) -> Outcome {
         // Every session starts its schedule at the same instant, 300 ms from now (connections
         // are set up before the first frame is due).
         let start = Instant::now() + Duration::from_millis(300);
+        let period = Duration::from_secs_f64(1.0 / run.rate_hz);
         let tasks: Vec<_> = (0..run.sessions)
-            .map(|_| tokio::spawn(one_session(url.clone(), frames.clone(), run.clone(), start)))
+            .map(|i| {
+                // Staggered: session i's frames are due i/N of a period after session 0's.
+                let offset = if run.staggered {
+                    period.mul_f64(i as f64 / run.sessions as f64)
+                } else {
+                    Duration::ZERO
+                };
+                tokio::spawn(one_session(
+                    url.clone(),
+                    frames.clone(),
+                    run.clone(),
+                    start + offset,
+                ))
+            })
             .collect();
         let measured_from = start + Duration::from_secs_f64(run.warmup_s);
         tokio::time::sleep_until(measured_from.into()).await;
@@ -209,15 +241,23 @@ fn main() {
     );
     let rate: f64 = bench_arg("--rate").unwrap_or(1000.0);
     let seconds: f64 = bench_arg("--seconds").unwrap_or(10.0);
+    let staggered = std::env::args().any(|a| a == "--staggered");
+    let model_free = std::env::args().any(|a| a == "--model-free");
     let counts: Vec<usize> = match bench_arg::<usize>("--sessions") {
         Some(n) => vec![n],
         None => vec![1, 5, 10, 25, 50],
     };
     let server = Server::start_binary(&graspd, &["--max-tactile-sessions", "256"]);
     println!(
-        "tactile load: {} ({}), rate {rate} Hz per session, {seconds} s per run (first 1 s not counted), {} cores",
+        "tactile load: {} ({}), {} detector, rate {rate} Hz per session, {}, {seconds} s per run (first 1 s not counted), {} cores",
         graspd.display(),
         RECORDING,
+        if model_free { "model-free" } else { "LSTM" },
+        if staggered {
+            "the sessions' frames spread over the period"
+        } else {
+            "every session's frame due at the same instant"
+        },
         std::thread::available_parallelism().map_or(0, |n| n.get())
     );
     println!(
@@ -233,6 +273,8 @@ fn main() {
                 rate_hz: rate,
                 seconds: seconds + 1.0,
                 warmup_s: 1.0,
+                staggered,
+                model_free,
             },
         );
         o.latencies_us.sort_by(f64::total_cmp);

@@ -75,13 +75,26 @@ fn run(fingers: usize, frames: usize, model: Detector) {
 
 /// One finger over the real recordings (every `mat*/mat*_1_bio.csv`), one after the other.
 fn run_recordings(limit: usize, model: Detector) {
+    let input = real_frames(limit);
+    if input.is_empty() {
+        println!("1 finger, real recordings: not found, skipped");
+        return;
+    }
+    measure(
+        "1 finger, 10 real recordings",
+        1,
+        TareConfig::pretared(),
+        &input,
+        model,
+    );
+}
+
+/// The frames of every `mat*/mat*_1_bio.csv`, one recording after the other, timestamps every
+/// 10 ms, at most `limit`; empty without ../shared.
+fn real_frames(limit: usize) -> Vec<Frame> {
     let dir = graspd_testkit::testdata_dir().join("tactile/biotac_slide");
     let Ok(entries) = std::fs::read_dir(&dir) else {
-        println!(
-            "1 finger, real recordings: {} not found, skipped",
-            dir.display()
-        );
-        return;
+        return Vec::new();
     };
     let mut paths: Vec<_> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -104,8 +117,7 @@ fn run_recordings(limit: usize, model: Detector) {
         }
     }
     input.truncate(limit);
-    let label = format!("1 finger, {} real recordings", paths.len());
-    measure(&label, 1, TareConfig::pretared(), &input, model);
+    input
 }
 
 fn measure(label: &str, fingers: usize, tare: TareConfig, input: &[Frame], model: Detector) {
@@ -161,6 +173,70 @@ fn measure(label: &str, fingers: usize, tare: TareConfig, input: &[Frame], model
     );
 }
 
+/// `sessions` one-finger sessions (the real recordings, each session starting `i·37` frames in,
+/// so their detections fall on different ticks), stepped tick by tick: one after the other with
+/// `Stabilizer::step`, and together with `Stabilizer::step_many` (one model run per tick for the
+/// windows due). CPU per frame of each, for a process that steps many sessions in one loop.
+fn run_sessions(sessions: usize, ticks: usize, model: &Arc<TactileModel>) {
+    let recordings = real_frames(ticks + sessions * 37);
+    if recordings.is_empty() {
+        println!("{sessions} sessions: real recordings not found, skipped");
+        return;
+    }
+    let config = || {
+        StabilizerConfig::for_fingers(vec![FingerConfig {
+            electrodes_only: false,
+            name: "f0".into(),
+            layout: SensorLayout::biotac(),
+            tare: TareConfig::pretared(),
+        }])
+    };
+    let open = || {
+        (0..sessions)
+            .map(|_| {
+                Stabilizer::with_detectors(
+                    config(),
+                    vec![Box::new(LstmDetector::new(model.clone()))],
+                )
+                .unwrap()
+            })
+            .collect::<Vec<_>>()
+    };
+    let frame = |i: usize, t: usize| {
+        let mut f = recordings[(i * 37 + t) % recordings.len()].clone();
+        f.timestamp = t as f64 * 0.01;
+        f
+    };
+    let input: Vec<Vec<Frame>> = (0..ticks)
+        .map(|t| (0..sessions).map(|i| frame(i, t)).collect())
+        .collect();
+    let mut alone = open();
+    let t0 = Instant::now();
+    for tick in &input {
+        for (s, f) in alone.iter_mut().zip(tick) {
+            black_box(s.step(f).unwrap());
+        }
+    }
+    let one_by_one = t0.elapsed().as_secs_f64();
+    let mut together = open();
+    let t0 = Instant::now();
+    for tick in &input {
+        let mut work: Vec<(&mut Stabilizer, &Frame)> = together.iter_mut().zip(tick).collect();
+        black_box(Stabilizer::step_many(&mut work));
+    }
+    let batched = t0.elapsed().as_secs_f64();
+    let per = |s: f64| s * 1e6 / (ticks * sessions) as f64;
+    println!(
+        "{sessions} sessions × 1 finger, real recordings, LSTM model: {:.1} µs per frame one by \
+         one (Stabilizer::step), {:.1} µs per frame together (Stabilizer::step_many, one run per \
+         tick); {:.0} against {:.0} frames/s on one core",
+        per(one_by_one),
+        per(batched),
+        (ticks * sessions) as f64 / one_by_one,
+        (ticks * sessions) as f64 / batched
+    );
+}
+
 fn main() {
     // `cargo bench` passes `--bench`; `cargo test --benches` runs a short smoke pass.
     let quick = !std::env::args().any(|a| a == "--bench");
@@ -174,6 +250,9 @@ fn main() {
             run(fingers, frames, m);
         }
         run_recordings(frames, m);
+    }
+    if let Some(m) = &model {
+        run_sessions(50, if quick { 30 } else { 600 }, m);
     }
     if let Some(c) = fit_calibration() {
         run_recordings(frames, Detector::Calibrated(&c));

@@ -267,14 +267,32 @@ const MATERIAL_FLOOR: f64 = 62.0;
 
 /// A small model that follows the contract: mean over time, then two linear maps.
 fn tiny(features: usize, window: i64) -> ModelBuilder {
+    tiny_batched(features, window, Dim::Fixed(1), Dim::Fixed(1), 0.0)
+}
+
+/// [`tiny`] with the input's and the outputs' batch axes as given and weights that differ by
+/// `spread` from one entry to the next (0: equal weights, uniform probabilities).
+fn tiny_batched(
+    features: usize,
+    window: i64,
+    batch_in: Dim,
+    batch_out: Dim,
+    spread: f32,
+) -> ModelBuilder {
+    let weights = |n: usize| {
+        (0..n)
+            .map(|k| 0.01 + spread * k as f32)
+            .collect::<Vec<f32>>()
+    };
+    let out = |n: i64| [batch_out, n.into()];
     ModelBuilder::new("tiny_tactile")
         .input(
             "window",
             FLOAT,
-            &[1.into(), window.into(), (features as i64).into()],
+            &[batch_in, window.into(), (features as i64).into()],
         )
-        .initializer("we", &[features as i64, 3], vec![0.01; features * 3])
-        .initializer("wm", &[features as i64, 4], vec![0.01; features * 4])
+        .initializer("we", &[features as i64, 3], weights(features * 3))
+        .initializer("wm", &[features as i64, 4], weights(features * 4))
         .node(
             "ReduceMean",
             &["window"],
@@ -286,8 +304,8 @@ fn tiny(features: usize, window: i64) -> ModelBuilder {
         )
         .node("MatMul", &["pooled", "we"], &["event_logits"], vec![])
         .node("MatMul", &["pooled", "wm"], &["material_logits"], vec![])
-        .output("event_logits", FLOAT, &[1.into(), 3.into()])
-        .output("material_logits", FLOAT, &[1.into(), 4.into()])
+        .output("event_logits", FLOAT, &out(3))
+        .output("material_logits", FLOAT, &out(4))
 }
 
 fn with_meta(b: ModelBuilder, skip: &str, replace: Option<(&str, &str)>) -> ModelBuilder {
@@ -407,4 +425,128 @@ fn malformed_models_are_refused_with_a_message_naming_the_problem() {
         .output("event_logits", FLOAT, &[1.into(), 3.into()]);
     let e = load_err(&with_meta(b, "", None).build());
     assert!(e.contains("no output 'material_logits'"), "{e}");
+}
+
+fn sample(pdc: f64, e: f64) -> DetectorSample {
+    DetectorSample {
+        pdc,
+        pac: 0.5 * pdc,
+        pac_vibration: 0.1 * pdc,
+        pac_samples: vec![0.5 * pdc],
+        tdc: 0.0,
+        tac: 0.0,
+        electrodes: vec![e, 2.0 * e, -e],
+    }
+}
+
+/// With a dynamic batch axis, several windows go through one run and each gets what it gets
+/// alone; with batch 1 the same call runs them one by one. A dynamic input with fixed outputs
+/// is refused.
+#[test]
+fn a_batch_of_windows_gives_what_each_window_gives_alone() {
+    init();
+    let windows: Vec<Vec<DetectorSample>> = (0..5)
+        .map(|k| {
+            (0..(4 + 7 * k))
+                .map(|t| sample(t as f64 * 0.3, k as f64 - t as f64 * 0.1))
+                .collect()
+        })
+        .collect();
+    let refs: Vec<&[DetectorSample]> = windows.iter().map(|w| w.as_slice()).collect();
+    for (batch, batched) in [(Dim::Param("batch"), true), (Dim::Fixed(1), false)] {
+        let bytes = with_meta(tiny_batched(8, 32, batch, batch, 0.003), "", None).build();
+        let m = TactileModel::from_bytes(&bytes, "tiny").unwrap();
+        assert_eq!(m.is_batched(), batched);
+        let together = m.infer_batch(&refs).unwrap();
+        assert_eq!(together.len(), refs.len());
+        for (w, (ev, mat)) in refs.iter().zip(&together) {
+            let (ev1, mat1) = m.infer(w, &mut Vec::new()).unwrap();
+            for (a, b) in ev.iter().chain(mat).zip(ev1.iter().chain(&mat1)) {
+                assert!((a - b).abs() < 1e-6, "batched {a} vs alone {b}");
+            }
+        }
+        // The windows differ, and so do their probabilities: the rows are not mixed up.
+        assert!(
+            (together[0].0[0] - together[4].0[0]).abs() > 1e-4,
+            "{together:?}"
+        );
+    }
+    let e = load_err(
+        &with_meta(
+            tiny_batched(8, 32, Dim::Param("batch"), Dim::Fixed(1), 0.0),
+            "",
+            None,
+        )
+        .build(),
+    );
+    assert!(e.contains("output 'event_logits'"), "{e}");
+}
+
+/// Sessions stepped together (`Stabilizer::step_many`, one model run for the windows due at the
+/// same frame) give each session what stepping it alone gives, on the shipped model (whose batch
+/// axis is dynamic) and the held-out generated sequences; a bad frame fails alone.
+#[test]
+fn sessions_stepped_together_match_sessions_stepped_alone() {
+    let model = shipped();
+    assert!(
+        model.is_batched(),
+        "the shipped model's batch axis is dynamic"
+    );
+    let names = fixture_names();
+    let recordings: Vec<(String, Recording)> =
+        names.iter().map(|n| (n.clone(), fixture(n).0)).collect();
+    let open = |name: &str| {
+        let style = if name.ends_with("_raw") {
+            "raw"
+        } else {
+            "pretared"
+        };
+        Stabilizer::with_detectors(
+            session(style),
+            vec![Box::new(LstmDetector::new(model.clone()))],
+        )
+        .unwrap()
+    };
+    let mut alone: Vec<Stabilizer> = recordings.iter().map(|(n, _)| open(n)).collect();
+    let mut together: Vec<Stabilizer> = recordings.iter().map(|(n, _)| open(n)).collect();
+    let frames: Vec<Vec<graspd_core::tactile::Frame>> =
+        recordings.iter().map(|(_, r)| r.frames()).collect();
+    let steps = frames.iter().map(Vec::len).min().unwrap();
+    let (mut compared, mut flipped) = (0usize, 0usize);
+    for t in 0..steps {
+        let want: Vec<_> = alone
+            .iter_mut()
+            .zip(&frames)
+            .map(|(s, f)| s.step(&f[t]).unwrap())
+            .collect();
+        let mut bad = frames[0][t].clone();
+        bad.fingers.clear();
+        let mut work: Vec<(&mut Stabilizer, &graspd_core::tactile::Frame)> = together
+            .iter_mut()
+            .zip(&frames)
+            .map(|(s, f)| (s, &f[t]))
+            .collect();
+        let mut extra = open(&names[0]);
+        if t == 5 {
+            work.push((&mut extra, &bad));
+        }
+        let got = Stabilizer::step_many(&mut work);
+        if t == 5 {
+            let e = got.last().unwrap().as_ref().unwrap_err();
+            assert!(e.field.starts_with("frame.fingers"), "{e}");
+            assert_eq!(extra.frames(), 0, "a rejected frame changes nothing");
+        }
+        for (w, g) in want.iter().zip(&got) {
+            let (w, g) = (&w.fingers[0], &g.as_ref().unwrap().fingers[0]);
+            compared += 1;
+            flipped += (w.event != g.event) as usize;
+            for (a, b) in w.event_probabilities.iter().zip(&g.event_probabilities) {
+                assert!((a - b).abs() < 1e-4, "frame {t}: alone {a} vs together {b}");
+            }
+            assert_eq!(w.force, g.force);
+        }
+    }
+    assert!(compared > 1000, "{compared} frames compared");
+    // Only a probability tie within 1e-5 could flip an event.
+    assert_eq!(flipped, 0);
 }

@@ -113,6 +113,21 @@ pub struct Detection {
 pub trait EventDetector: Send {
     /// `window` is oldest first; it is never empty.
     fn detect(&mut self, window: &[DetectorSample]) -> Detection;
+
+    /// Detectors with the same key run one model whose runs can take the windows of several
+    /// sessions at once ([`Self::detect_many`], `Stabilizer::step_many`); None (the default):
+    /// this detector decides alone.
+    fn batch_key(&self) -> Option<usize> {
+        None
+    }
+
+    /// The detections of several windows (each oldest first, never empty), of detectors that
+    /// share this one's [`Self::batch_key`], in one run of their model where it can. The
+    /// default detects each window alone, as [`Self::detect`] would without its state.
+    fn detect_many(&self, windows: &[&[DetectorSample]]) -> Vec<Detection> {
+        let _ = windows;
+        unreachable!("detect_many is only asked of a detector with a batch key")
+    }
 }
 
 /// The window t_seq's bounds, for a session and for a calibration alike: l of 1 to 1024
@@ -182,6 +197,12 @@ impl<T> WindowSampler<T> {
     /// The window, oldest first.
     pub fn window(&mut self) -> &[T] {
         self.buf.make_contiguous()
+    }
+
+    /// The window without making it contiguous: the readings in their first run only, all of
+    /// them once [`Self::window`] ran after the last push.
+    pub fn window_ref(&self) -> &[T] {
+        self.buf.as_slices().0
     }
 }
 

@@ -7,9 +7,12 @@
 //!
 //! # Model contract (checked by [`TactileModel::load`], models/tactile/MODEL_CARD.md)
 //!
-//! - **Input**: exactly one, float32, `[1, l, F]` (batch 1 or dynamic; l fixed or dynamic).
+//! - **Input**: exactly one, float32, `[1, l, F]` (batch 1 or dynamic; l fixed or dynamic). With
+//!   a dynamic batch axis the windows of several sessions that are due together share one run
+//!   ([`TactileModel::infer_batch`]); with batch 1 they run one after another.
 //! - **Outputs**: `event_logits` `[1, 3]` (non-contact, contact, slip) and `material_logits`
-//!   `[1, 4]` (paper, foam, plastic, metal), float32 logits; graspd applies the softmax.
+//!   `[1, 4]` (paper, foam, plastic, metal), float32 logits, the batch axis as the input's;
+//!   graspd applies the softmax.
 //! - **Metadata** (`custom_metadata_map`), all required:
 //!   `graspd.tactile.features` — the F feature names in input order, from `pdc`, `pac` (mean of
 //!   the frame's pac samples), `pac_vibration`, `tdc`, `tac` and `e1`…`eN` (tared electrodes, see
@@ -113,7 +116,16 @@ pub struct TactileModel {
     window: usize,
     stride: usize,
     electrodes: usize,
+    /// Whether the batch axis is dynamic (windows of several sessions share a run).
+    batched: bool,
 }
+
+/// Windows one run of a model with a dynamic batch axis takes at most (a larger batch is run in
+/// pieces).
+pub const MAX_BATCH: usize = 64;
+
+/// Event and material probabilities of one window (softmax of the model's logits).
+pub type ModelOutput = ([f64; 3], [f64; 4]);
 
 impl TactileModel {
     /// Loads the ONNX file at `path` and checks it against the contract (module doc).
@@ -164,6 +176,7 @@ impl TactileModel {
             inv_std: contract.std.iter().map(|s| 1.0 / s).collect(),
             window: contract.window,
             stride: contract.stride,
+            batched: contract.batched,
         })
     }
 
@@ -187,6 +200,12 @@ impl TactileModel {
         self.electrodes
     }
 
+    /// Whether the model's batch axis is dynamic: [`Self::infer_batch`] then runs up to
+    /// [`MAX_BATCH`] windows at once.
+    pub fn is_batched(&self) -> bool {
+        self.batched
+    }
+
     /// Event and material probabilities (softmax of the logits) for a window (oldest first, 1 to
     /// l samples; shorter windows are left-padded with the oldest sample). `input` is scratch
     /// space reused between calls.
@@ -194,41 +213,75 @@ impl TactileModel {
         &self,
         window: &[DetectorSample],
         input: &mut Vec<f32>,
-    ) -> Result<([f64; 3], [f64; 4]), TactileModelError> {
-        if window.is_empty() || window.len() > self.window {
-            return Err(TactileModelError::Inference(format!(
-                "the window has {} samples; the model takes 1 to {}",
-                window.len(),
-                self.window
-            )));
+    ) -> Result<ModelOutput, TactileModelError> {
+        let mut out = self.run(&[window], input)?;
+        Ok(out.remove(0))
+    }
+
+    /// [`Self::infer`] for several windows: one run per [`MAX_BATCH`] windows when the batch
+    /// axis is dynamic, else one run per window. The outputs are in the windows' order.
+    pub fn infer_batch(
+        &self,
+        windows: &[&[DetectorSample]],
+    ) -> Result<Vec<ModelOutput>, TactileModelError> {
+        let mut input = Vec::new();
+        let per_run = if self.batched { MAX_BATCH } else { 1 };
+        let mut out = Vec::with_capacity(windows.len());
+        for chunk in windows.chunks(per_run) {
+            out.extend(self.run(chunk, &mut input)?);
         }
+        Ok(out)
+    }
+
+    /// One run over `windows` (as many as the batch axis allows).
+    fn run(
+        &self,
+        windows: &[&[DetectorSample]],
+        input: &mut Vec<f32>,
+    ) -> Result<Vec<ModelOutput>, TactileModelError> {
         let f = self.features.len();
+        let b = windows.len();
         input.clear();
-        let pad = self.window - window.len();
-        for s in std::iter::repeat_n(&window[0], pad).chain(window) {
-            for (k, feat) in self.features.iter().enumerate() {
-                input.push((feat.value(s) as f32 - self.mean[k]) * self.inv_std[k]);
+        for window in windows {
+            if window.is_empty() || window.len() > self.window {
+                return Err(TactileModelError::Inference(format!(
+                    "the window has {} samples; the model takes 1 to {}",
+                    window.len(),
+                    self.window
+                )));
+            }
+            let pad = self.window - window.len();
+            for s in std::iter::repeat_n(&window[0], pad).chain(window.iter()) {
+                for (k, feat) in self.features.iter().enumerate() {
+                    input.push((feat.value(s) as f32 - self.mean[k]) * self.inv_std[k]);
+                }
             }
         }
         let fail = |e: ort::Error| TactileModelError::Inference(e.to_string());
-        let view = ndarray::ArrayView3::from_shape((1, self.window, f), &input[..])
+        let view = ndarray::ArrayView3::from_shape((b, self.window, f), &input[..])
             .map_err(|e| TactileModelError::Inference(e.to_string()))?;
         let tensor = TensorRef::from_array_view(view).map_err(fail)?;
         let mut session = self.session.lock().unwrap_or_else(PoisonError::into_inner);
         let outputs = session.run(ort::inputs![tensor]).map_err(fail)?;
-        let read = |name: &str, n: usize| -> Result<Vec<f64>, TactileModelError> {
+        let read = |name: &str, n: usize| -> Result<Vec<f32>, TactileModelError> {
             let (shape, v) = outputs[name].try_extract_tensor::<f32>().map_err(fail)?;
-            if v.len() != n {
+            if v.len() != b * n {
                 return Err(TactileModelError::Inference(format!(
-                    "output '{name}' has shape {}; it needs [1, {n}]",
+                    "output '{name}' has shape {}; it needs [{b}, {n}]",
                     fmt_dims(shape, &[])
                 )));
             }
-            Ok(softmax(v))
+            Ok(v.to_vec())
         };
         let e = read(OUT_EVENT, 3)?;
         let m = read(OUT_MATERIAL, 4)?;
-        Ok(([e[0], e[1], e[2]], [m[0], m[1], m[2], m[3]]))
+        Ok(e.chunks(3)
+            .zip(m.chunks(4))
+            .map(|(e, m)| {
+                let (e, m) = (softmax(e), softmax(m));
+                ([e[0], e[1], e[2]], [m[0], m[1], m[2], m[3]])
+            })
+            .collect())
     }
 }
 
@@ -245,6 +298,7 @@ struct Contract {
     std: Vec<f32>,
     window: usize,
     stride: usize,
+    batched: bool,
 }
 
 /// Checks inputs, outputs and metadata against the contract (module doc).
@@ -336,6 +390,7 @@ fn check_contract(session: &Session) -> Result<Contract, String> {
             fmt_dims(dims, syms)
         ));
     }
+    let batched = dims[0] < 0;
     for (name, n) in [(OUT_EVENT, 3usize), (OUT_MATERIAL, 4)] {
         let Some(o) = session.outputs().iter().find(|o| o.name() == name) else {
             let have: Vec<String> = session
@@ -351,9 +406,11 @@ fn check_contract(session: &Session) -> Result<Contract, String> {
         };
         let (ty, dims, syms) =
             tensor_info(o.dtype()).ok_or_else(|| format!("output '{name}' is not a tensor"))?;
+        // A dynamic batch axis in the input needs one in the outputs.
         if ty != TensorElementType::Float32
             || dims.len() != 2
             || !dim_ok(dims[0], 1)
+            || (batched && dims[0] >= 0)
             || !dim_ok(dims[1], n)
         {
             return Err(format!(
@@ -368,6 +425,7 @@ fn check_contract(session: &Session) -> Result<Contract, String> {
         std,
         window,
         stride,
+        batched,
     })
 }
 
@@ -390,12 +448,16 @@ impl LstmDetector {
     }
 }
 
-impl EventDetector for LstmDetector {
-    /// Eq 6.3 (event) and Eq 6.4 (material); material is `Unknown` unless the event is contact
-    /// or slip. A window longer than the model's l uses its newest l samples.
-    fn detect(&mut self, window: &[DetectorSample]) -> Detection {
-        let w = &window[window.len().saturating_sub(self.model.window)..];
-        match self.model.infer(w, &mut self.input) {
+impl LstmDetector {
+    /// Eq 6.3 (event) and Eq 6.4 (material) from the model's probabilities; material is
+    /// `Unknown` unless the event is contact or slip. A failed run answers with the model-free
+    /// detector, so that a session keeps its contact/slip safety behaviour.
+    fn detection(
+        &self,
+        output: Result<ModelOutput, &TactileModelError>,
+        window: &[DetectorSample],
+    ) -> Detection {
+        match output {
             Ok((ev, mat)) => {
                 let best = (0..3).max_by(|&a, &b| ev[a].total_cmp(&ev[b])).unwrap_or(0);
                 let event = ContactEvent::ALL[best];
@@ -416,8 +478,39 @@ impl EventDetector for LstmDetector {
             }
             Err(e) => {
                 tracing::warn!(model = %self.model.source_name, error = %e, "tactile model run failed; model-free detection for this window");
-                self.fallback.detect(window)
+                self.fallback.clone().detect(window)
             }
+        }
+    }
+
+    /// The newest l samples of a window (a longer one is cut to the model's l).
+    fn newest<'w>(&self, window: &'w [DetectorSample]) -> &'w [DetectorSample] {
+        &window[window.len().saturating_sub(self.model.window)..]
+    }
+}
+
+impl EventDetector for LstmDetector {
+    fn detect(&mut self, window: &[DetectorSample]) -> Detection {
+        let output = self.model.infer(self.newest(window), &mut self.input);
+        self.detection(output.as_ref().map(|o| *o), window)
+    }
+
+    /// The model's address: detectors of one loaded model share its runs.
+    fn batch_key(&self) -> Option<usize> {
+        self.model
+            .is_batched()
+            .then_some(Arc::as_ptr(&self.model) as usize)
+    }
+
+    fn detect_many(&self, windows: &[&[DetectorSample]]) -> Vec<Detection> {
+        let newest: Vec<&[DetectorSample]> = windows.iter().map(|w| self.newest(w)).collect();
+        match self.model.infer_batch(&newest) {
+            Ok(out) => out
+                .into_iter()
+                .zip(windows)
+                .map(|(o, w)| self.detection(Ok(o), w))
+                .collect(),
+            Err(e) => windows.iter().map(|w| self.detection(Err(&e), w)).collect(),
         }
     }
 }

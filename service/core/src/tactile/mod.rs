@@ -6,6 +6,7 @@
 //! (`pid`). `stabilizer::Stabilizer` runs it as a session on the `readings`; `recording` reads the CSV layout of the
 //! real BioTac recordings. Plain Rust: no transport types.
 
+pub mod batched_step;
 pub mod calibration;
 pub mod centroid_slip;
 pub mod desired_force;

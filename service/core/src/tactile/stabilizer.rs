@@ -26,6 +26,7 @@ use super::pid::{Pid, PidGains};
 pub use super::readings::{FingerReading, Frame, SampleSource};
 use super::tactile_image::TactileImage;
 use super::taring::TareConfig;
+use super::taring::TaredReading;
 use crate::error::FieldError;
 use serde::Serialize;
 
@@ -234,7 +235,7 @@ pub struct FrameResult {
     pub fingers: Vec<FingerResult>,
 }
 
-struct FingerState {
+pub(super) struct FingerState {
     config: FingerConfig,
     source: SampleSource,
     sampler: WindowSampler<DetectorSample>,
@@ -431,6 +432,23 @@ impl Stabilizer {
 
     /// Processes one frame (Algorithm 5, one iteration for every finger).
     pub fn step(&mut self, frame: &Frame) -> Result<FrameResult, FieldError> {
+        let at = self.begin(frame)?;
+        let sensed: Vec<Sensed> = self
+            .fingers
+            .iter_mut()
+            .zip(&frame.fingers)
+            .map(|(f, r)| f.sense(r))
+            .collect();
+        for (f, s) in self.fingers.iter_mut().zip(&sensed) {
+            if s.due {
+                f.detect_alone();
+            }
+        }
+        Ok(self.finish(frame, at, sensed))
+    }
+
+    /// Validates a frame and advances the session's clock: the frame's timestamp and time step.
+    pub(super) fn begin(&mut self, frame: &Frame) -> Result<(f64, f64), FieldError> {
         self.validate_frame(frame)?;
         let dt = match self.last_timestamp {
             Some(prev) => (frame.timestamp - prev).clamp(MIN_DT, MAX_DT),
@@ -438,6 +456,16 @@ impl Stabilizer {
         };
         self.last_timestamp = Some(frame.timestamp);
         self.frames += 1;
+        Ok((frame.timestamp, dt))
+    }
+
+    /// The frame's result once every finger due for detection has its new detection.
+    pub(super) fn finish(
+        &mut self,
+        frame: &Frame,
+        at: (f64, f64),
+        sensed: Vec<Sensed>,
+    ) -> FrameResult {
         let unit = if self.config.calibration_gain.is_some() {
             ForceUnit::Newton
         } else {
@@ -449,13 +477,21 @@ impl Stabilizer {
         let results = self
             .fingers
             .iter_mut()
-            .zip(&frame.fingers)
-            .map(|(f, r)| f.step(r, (frame.timestamp, dt), &law, &estimator, unit, moving))
+            .zip(sensed)
+            .map(|(f, s)| f.act(s, at, &law, &estimator, unit, moving))
             .collect();
-        Ok(FrameResult {
+        FrameResult {
             timestamp: frame.timestamp,
             fingers: results,
-        })
+        }
+    }
+
+    pub(super) fn fingers(&self) -> &[FingerState] {
+        &self.fingers
+    }
+
+    pub(super) fn fingers_mut(&mut self) -> &mut [FingerState] {
+        &mut self.fingers
     }
 }
 
@@ -491,12 +527,60 @@ fn analyze_session(mut s: Stabilizer, frames: &[Frame]) -> Result<Vec<FrameResul
         .collect()
 }
 
+/// One finger's frame up to detection ([`FingerState::sense`]).
+pub(super) struct Sensed {
+    tared: TaredReading,
+    /// Whether the baseline was complete (the reading gave a detector sample).
+    sampled: bool,
+    /// Whether the finger's detector is to run on its window for this frame.
+    pub due: bool,
+}
+
 impl FingerState {
-    /// One finger's frame (`at`: the frame's timestamp and the time step, s); `moving`: the
-    /// session's `centroid_slip_mm_s`.
-    fn step(
+    /// Taring and the window t_seq (Algorithm 5, line 4 up to the detector): detection is due
+    /// when the sampler kept the reading, or when the finger has none yet.
+    pub(super) fn sense(&mut self, r: &FingerReading) -> Sensed {
+        let (tared, sample) = self.source.next(r);
+        let sampled = sample.is_some();
+        let due = match sample {
+            Some(sample) => {
+                let kept = self.sampler.push(sample);
+                // Contiguous now, for the detectors that borrow it (`window_ref`).
+                self.sampler.window();
+                kept || self.last_detection.is_none()
+            }
+            None => false,
+        };
+        Sensed {
+            tared,
+            sampled,
+            due,
+        }
+    }
+
+    /// The finger's window t_seq, oldest first (contiguous since [`Self::sense`]).
+    pub(super) fn window_ref(&self) -> &[DetectorSample] {
+        self.sampler.window_ref()
+    }
+
+    pub(super) fn detector(&self) -> &dyn EventDetector {
+        self.detector.as_ref()
+    }
+
+    /// Runs the finger's own detector on its window.
+    pub(super) fn detect_alone(&mut self) {
+        self.last_detection = Some(self.detector.detect(self.sampler.window()));
+    }
+
+    pub(super) fn set_detection(&mut self, d: Detection) {
+        self.last_detection = Some(d);
+    }
+
+    /// The rest of one finger's frame (`at`: the frame's timestamp and the time step, s);
+    /// `moving`: the session's `centroid_slip_mm_s`.
+    fn act(
         &mut self,
-        r: &FingerReading,
+        sensed: Sensed,
         at: (f64, f64),
         law: &DesiredForceLaw,
         estimator: &ForceEstimator,
@@ -505,13 +589,10 @@ impl FingerState {
     ) -> FingerResult {
         let (timestamp, dt) = at;
         let moving = moving.or(self.config.electrodes_only.then_some(ELECTRODE_SLIP_MM_S));
+        let tared = sensed.tared;
         // Line 4: detection on t_seq (only once the baseline is complete).
-        let (tared, sample) = self.source.next(r);
-        let mut detection = if let Some(sample) = sample {
-            if self.sampler.push(sample) || self.last_detection.is_none() {
-                self.last_detection = Some(self.detector.detect(self.sampler.window()));
-            }
-            self.last_detection.clone().expect("set above")
+        let mut detection = if sensed.sampled {
+            self.last_detection.clone().expect("detected when due")
         } else {
             Detection {
                 event: ContactEvent::NonContact,
