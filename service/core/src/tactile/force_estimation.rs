@@ -132,7 +132,7 @@ impl Gmm1d {
                 }
                 if s > 0.0 && s.is_finite() {
                     row.iter_mut().for_each(|r| *r /= s);
-                    let sc = s.powi(c as i32);
+                    let sc = if c == 1.0 { s } else { s.powi(c as i32) };
                     if sc > 0.0 && sc.is_finite() {
                         product *= sc;
                     } else {
