@@ -75,26 +75,21 @@ fn run(fingers: usize, frames: usize, model: Detector) {
 
 /// One finger over the real recordings (every `mat*/mat*_1_bio.csv`), one after the other.
 fn run_recordings(limit: usize, model: Detector) {
-    let input = real_frames(limit);
+    let (input, recordings) = real_frames(limit);
     if input.is_empty() {
         println!("1 finger, real recordings: not found, skipped");
         return;
     }
-    measure(
-        "1 finger, 10 real recordings",
-        1,
-        TareConfig::pretared(),
-        &input,
-        model,
-    );
+    let label = format!("1 finger, {recordings} real recordings");
+    measure(&label, 1, TareConfig::pretared(), &input, model);
 }
 
 /// The frames of every `mat*/mat*_1_bio.csv`, one recording after the other, timestamps every
-/// 10 ms, at most `limit`; empty without ../shared.
-fn real_frames(limit: usize) -> Vec<Frame> {
+/// 10 ms, at most `limit`, and how many recordings they came from; empty without ../shared.
+fn real_frames(limit: usize) -> (Vec<Frame>, usize) {
     let dir = graspd_testkit::testdata_dir().join("tactile/biotac_slide");
     let Ok(entries) = std::fs::read_dir(&dir) else {
-        return Vec::new();
+        return (Vec::new(), 0);
     };
     let mut paths: Vec<_> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -117,7 +112,7 @@ fn real_frames(limit: usize) -> Vec<Frame> {
         }
     }
     input.truncate(limit);
-    input
+    (input, paths.len())
 }
 
 fn measure(label: &str, fingers: usize, tare: TareConfig, input: &[Frame], model: Detector) {
@@ -178,7 +173,7 @@ fn measure(label: &str, fingers: usize, tare: TareConfig, input: &[Frame], model
 /// `Stabilizer::step`, and together with `Stabilizer::step_many` (one model run per tick for the
 /// windows due). CPU per frame of each, for a process that steps many sessions in one loop.
 fn run_sessions(sessions: usize, ticks: usize, model: &Arc<TactileModel>) {
-    let recordings = real_frames(ticks + sessions * 37);
+    let (recordings, _) = real_frames(ticks + sessions * 37);
     if recordings.is_empty() {
         println!("{sessions} sessions: real recordings not found, skipped");
         return;
