@@ -57,8 +57,17 @@ impl Stabilizer {
                 let (i, j) = members[0];
                 work[i].0.fingers()[j].detector().detect_many(&windows)
             };
-            for (&(i, j), d) in members.iter().zip(detections) {
-                work[i].0.fingers_mut()[j].set_detection(d);
+            match detections {
+                Some(detections) => {
+                    for (&(i, j), d) in members.iter().zip(detections) {
+                        work[i].0.fingers_mut()[j].set_detection(d);
+                    }
+                }
+                None => {
+                    for &(i, j) in members {
+                        work[i].0.fingers_mut()[j].detect_alone();
+                    }
+                }
             }
         }
         work.iter_mut()
@@ -75,5 +84,87 @@ impl Stabilizer {
         self.fingers()
             .iter()
             .any(|f| f.detector().batch_key().is_some())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tactile::detector::{ContactEvent, Detection, EventDetector, ModelFreeDetector};
+    use crate::tactile::layout::SensorLayout;
+    use crate::tactile::stabilizer::{FingerConfig, FingerReading, StabilizerConfig};
+    use crate::tactile::taring::TareConfig;
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    /// Shares a batch key but runs no batches: each finger must then detect alone.
+    struct Keyed {
+        inner: ModelFreeDetector,
+        calls: Arc<AtomicUsize>,
+    }
+
+    impl EventDetector for Keyed {
+        fn detect(&mut self, window: &[DetectorSample]) -> Detection {
+            self.calls.fetch_add(1, Ordering::Relaxed);
+            self.inner.detect(window)
+        }
+
+        fn batch_key(&self) -> Option<usize> {
+            Some(7)
+        }
+    }
+
+    fn session(detector: Box<dyn EventDetector>) -> Stabilizer {
+        let finger = FingerConfig {
+            electrodes_only: false,
+            name: "th".into(),
+            layout: SensorLayout::biotac(),
+            tare: TareConfig::pretared(),
+        };
+        Stabilizer::with_detectors(StabilizerConfig::for_fingers(vec![finger]), vec![detector])
+            .unwrap()
+    }
+
+    fn frame(t: usize) -> Frame {
+        let press = if t > 20 { 40.0 } else { 0.0 };
+        Frame {
+            timestamp: t as f64 * 0.01,
+            fingers: vec![FingerReading {
+                pdc: press,
+                pac: vec![0.0; 22],
+                tdc: 0.0,
+                tac: 0.0,
+                electrodes: (0..19).map(|e| press * (e % 4) as f64).collect(),
+            }],
+        }
+    }
+
+    /// Sessions whose detectors share a key but cannot run a batch are stepped as
+    /// `Stabilizer::step` steps them: one detection per due frame each, the same results.
+    #[test]
+    fn a_shared_key_without_batches_detects_each_window_alone() {
+        let (many, one) = (Arc::new(AtomicUsize::new(0)), Arc::new(AtomicUsize::new(0)));
+        let keyed = |calls: &Arc<AtomicUsize>| -> Box<dyn EventDetector> {
+            Box::new(Keyed {
+                inner: ModelFreeDetector::default(),
+                calls: calls.clone(),
+            })
+        };
+        let (mut a, mut b) = (session(keyed(&many)), session(keyed(&many)));
+        let mut alone = session(keyed(&one));
+        let mut contact = false;
+        for t in 0..60 {
+            let f = frame(t);
+            let want = alone.step(&f).unwrap();
+            let got = Stabilizer::step_many(&mut [(&mut a, &f), (&mut b, &f)]);
+            for g in got {
+                assert_eq!(g.unwrap(), want, "frame {t}");
+            }
+            contact |= want.fingers[0].event != ContactEvent::NonContact;
+        }
+        assert!(contact, "the press is seen");
+        let once = one.load(Ordering::Relaxed);
+        assert!(once >= 10, "{once} detections");
+        assert_eq!(many.load(Ordering::Relaxed), 2 * once);
     }
 }

@@ -122,11 +122,11 @@ pub trait EventDetector: Send {
     }
 
     /// The detections of several windows (each oldest first, never empty), of detectors that
-    /// share this one's [`Self::batch_key`], in one run of their model where it can. The
-    /// default detects each window alone, as [`Self::detect`] would without its state.
-    fn detect_many(&self, windows: &[&[DetectorSample]]) -> Vec<Detection> {
+    /// share this one's [`Self::batch_key`], in one run of their model, in the windows' order.
+    /// None (the default): the detector cannot, and each detector detects its own window.
+    fn detect_many(&self, windows: &[&[DetectorSample]]) -> Option<Vec<Detection>> {
         let _ = windows;
-        unreachable!("detect_many is only asked of a detector with a batch key")
+        None
     }
 }
 

@@ -502,16 +502,16 @@ impl EventDetector for LstmDetector {
             .then_some(Arc::as_ptr(&self.model) as usize)
     }
 
-    fn detect_many(&self, windows: &[&[DetectorSample]]) -> Vec<Detection> {
+    fn detect_many(&self, windows: &[&[DetectorSample]]) -> Option<Vec<Detection>> {
         let newest: Vec<&[DetectorSample]> = windows.iter().map(|w| self.newest(w)).collect();
-        match self.model.infer_batch(&newest) {
+        Some(match self.model.infer_batch(&newest) {
             Ok(out) => out
                 .into_iter()
                 .zip(windows)
                 .map(|(o, w)| self.detection(Ok(o), w))
                 .collect(),
             Err(e) => windows.iter().map(|w| self.detection(Err(&e), w)).collect(),
-        }
+        })
     }
 }
 
