@@ -365,6 +365,18 @@ pub async fn rest_error(response: reqwest::Response) -> (u16, String, Option<Str
     )
 }
 
+/// Asserts a REST refusal of bad input: 400 `invalid_argument` naming `field`. Returns the
+/// message.
+pub async fn refused_naming(response: reqwest::Response, field: &str) -> String {
+    let (status, code, got, message) = rest_error(response).await;
+    assert_eq!(
+        (status, code.as_str(), got.as_deref()),
+        (400, "invalid_argument", Some(field)),
+        "{message}"
+    );
+    message
+}
+
 /// Drops the wall-clock fields, which differ between any two runs.
 pub fn without_timings(mut v: serde_json::Value) -> serde_json::Value {
     let o = v.as_object_mut().unwrap();

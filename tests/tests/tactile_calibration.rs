@@ -8,7 +8,7 @@
 use graspd::facade::{CalibrationUpload, RecordingUpload};
 use graspd::grpc::convert;
 use graspd_core::tactile::TareConfig;
-use graspd_e2e::{Server, http, rest_error};
+use graspd_e2e::{Server, http, refused_naming, rest_error};
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::tactile_stabilizer_client::TactileStabilizerClient;
 use serde_json::json;
@@ -277,12 +277,7 @@ async fn bad_calibrations_and_sessions_that_do_not_fit_are_refused_naming_the_fi
             .send()
             .await
             .unwrap();
-        let (status, _, field, message) = rest_error(response).await;
-        assert_eq!(
-            (status, field.as_deref()),
-            (400, Some(want_field)),
-            "{message}"
-        );
+        refused_naming(response, want_field).await;
     }
     // The same rule over gRPC: a stream naming an unknown calibration.
     let (tx, rx) = tokio::sync::mpsc::channel(1);
