@@ -9,15 +9,16 @@ fn root() -> PathBuf {
 }
 
 /// Layer of each workspace crate (docs/architecture.md): a crate may depend on lower ones only.
-const LAYERS: [(&str, u8); 8] = [
+const LAYERS: [(&str, u8); 9] = [
     ("graspd-core", 0),
     ("graspd-proto", 0),
+    ("graspd-api", 1),
     ("graspd-testkit", 1),
-    ("graspd", 1),
+    ("graspd", 2),
     ("graspd-grasp-type-data", 2),
-    ("graspctl", 2),
-    ("graspd-sim", 2),
-    ("graspd-e2e", 3),
+    ("graspctl", 3),
+    ("graspd-sim", 3),
+    ("graspd-e2e", 4),
 ];
 
 /// Crates of the transports, which the domain crate must not use.

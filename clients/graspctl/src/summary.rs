@@ -1,6 +1,6 @@
 //! Human-readable summaries of plans and hands.
 
-use graspd::grpc::convert::{plane_source_name, type_source_name};
+use graspd_api::convert::{plane_source_name, type_source_name};
 use graspd_core::planning::{Pose, StageStats};
 use graspd_core::{GraspPlan, GraspType, HandDescription};
 use nalgebra::{Point3, Vector3};

@@ -4,9 +4,11 @@
 use crate::SimError;
 use crate::camera::RgbdImage;
 use crate::hand::SimHand;
+use graspd_api::convert::pose_to_proto;
+use graspd_core::planning::Pose;
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::grasp_planner_client::GraspPlannerClient;
-use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion};
+use nalgebra::Point3;
 use std::path::Path;
 use tonic::transport::Channel;
 
@@ -178,7 +180,7 @@ fn frame_to_proto(image: &RgbdImage) -> pb::RgbdFrame {
             k: Vec::new(),
         }),
         depth_scale: 1.0,
-        camera_to_world: Some(pose_to_proto(&image.camera_to_world)),
+        camera_to_world: Some(pose_to_proto(&Pose::from_isometry(&image.camera_to_world))),
     }
 }
 
@@ -264,42 +266,4 @@ fn collect_assets(base: &Path, dir: &Path, out: &mut Vec<pb::HandAsset>) -> Resu
         out.push(pb::HandAsset { path: rel, data });
     }
     Ok(())
-}
-
-pub fn pose_to_proto(p: &Isometry3<f64>) -> pb::Pose {
-    let t = p.translation.vector;
-    let q = p.rotation;
-    pb::Pose {
-        position: Some(pb::Vec3 {
-            x: t.x,
-            y: t.y,
-            z: t.z,
-        }),
-        orientation: Some(pb::Quaternion {
-            x: q.i,
-            y: q.j,
-            z: q.k,
-            w: q.w,
-        }),
-    }
-}
-
-/// A pose from the wire (missing parts read as the identity).
-pub fn pose_from_proto(p: &Option<pb::Pose>) -> Option<Isometry3<f64>> {
-    let p = p.as_ref()?;
-    let t = p.position?;
-    let q = p.orientation?;
-    Some(Isometry3::from_parts(
-        Translation3::new(t.x, t.y, t.z),
-        UnitQuaternion::from_quaternion(Quaternion::new(q.w, q.x, q.y, q.z)),
-    ))
-}
-
-/// The grasp type's name as the API spells it in JSON (`large_wrap`, …).
-pub fn grasp_type_name(t: i32) -> &'static str {
-    // The wire enum numbers the types s = 1..6 in GraspType::ALL's order; 0 is unspecified.
-    (t as usize)
-        .checked_sub(1)
-        .and_then(|i| graspd_core::GraspType::ALL.get(i))
-        .map_or("unspecified", |g| g.name())
 }

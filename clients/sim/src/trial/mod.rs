@@ -41,7 +41,8 @@ use crate::debug;
 use crate::hand::SimHand;
 pub use crate::record::{Outcome, TrialRecord};
 use crate::scene::{Scene, from_mj};
-use crate::service::{PlanAsk, PlanResult, Service, grasp_type_name, pose_from_proto};
+use crate::service::{PlanAsk, PlanResult, Service};
+use graspd_api::convert::{grasp_type_from_proto, pose_from_proto};
 use nalgebra::{Isometry3, Point3, Vector3};
 use rand::{RngExt, SeedableRng};
 
@@ -242,7 +243,13 @@ pub fn pre_grasp_and_approach(
     let start_com = trial.object_com();
     rec.plan_ms = Some(plan.latency * 1e3);
     rec.server_ms = r.timings.as_ref().map(|t| t.total * 1e3);
-    rec.grasp_type = Some(grasp_type_name(r.grasp_type).to_string());
+    rec.grasp_type = Some(
+        grasp_type_from_proto(r.grasp_type, "grasp_type")
+            .ok()
+            .flatten()
+            .map_or("unspecified", |g| g.name())
+            .to_string(),
+    );
     rec.type_source = Some(r.type_source.clone());
     rec.feasible = Some(r.feasible);
     rec.infeasible_reason = r.infeasible_reason.clone();
@@ -257,10 +264,12 @@ pub fn pre_grasp_and_approach(
         .collect();
     rec.gravity_resistance = r.quality.map(|q| q.gravity_resistance);
     rec.gii = r.quality.map(|q| q.gii);
+    let pose =
+        |p: &Option<graspd_proto::v1::Pose>| pose_from_proto(p, "").ok().map(|p| p.isometry());
     let (Some(root), Some(hand_pose), Some(pre)) = (
-        pose_from_proto(&r.root_pose),
-        pose_from_proto(&r.hand_pose),
-        pose_from_proto(&r.pregrasp_pose),
+        pose(&r.root_pose),
+        pose(&r.hand_pose),
+        pose(&r.pregrasp_pose),
     ) else {
         rec.detail = "the plan has no root_pose (the hand has no kinematics)".into();
         return Err(Outcome::NoPlan);
@@ -357,8 +366,15 @@ fn execute(
     let commands = if trial.scene.balanced_grip {
         crate::closing::within_force_limits(&trial.scene.model, &grasp, &closed)
     } else {
-        let f = std::env::var("XGRIP").ok().and_then(|v| v.parse::<f64>().ok()).unwrap_or(1.0);
-        grasp.iter().zip(&closed).map(|(g, c)| g + f * (c - g)).collect()
+        let f = std::env::var("XGRIP")
+            .ok()
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(1.0);
+        grasp
+            .iter()
+            .zip(&closed)
+            .map(|(g, c)| g + f * (c - g))
+            .collect()
     };
     let at_touch = crate::closing::close(trial, &grasp, &commands, opts.guarded_close);
     if opts.grip_reflex {

@@ -1,8 +1,8 @@
 //! Hand descriptions and RegisterHand requests and responses.
 
-use super::values::*;
 use crate::facade::RegisteredHand;
 use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
+use graspd_api::convert::values::*;
 use graspd_core::hand::{Finger, GraspRealisation, HandGeometry, TypeEquivalence};
 use graspd_core::{FieldError, HandDescription};
 use graspd_proto::v1 as pb;

@@ -1,25 +1,25 @@
-//! The one place that converts between `graspd.v1` proto messages and domain types, both ways
-//! (the server decodes requests and encodes plans; clients do the reverse). Decoding treats the
+//! The conversions between `graspd.v1` proto messages and the server's request and answer
+//! types, both ways (the server decodes requests and encodes plans; `graspctl` does the
+//! reverse). Decoding treats the
 //! message as untrusted: every error names the offending field by its proto path.
 //!
-//! One file per message family: [`values`] (vectors, poses, enums), [`hands`], [`plan`]
-//! (PlanGrasp requests and responses), [`perception`], [`ros`] (PointCloud2 in, MoveIt grasps
-//! out), [`tactile`], [`calibration`].
+//! One file per message family: [`hands`], [`plan`] (PlanGrasp requests and responses), [`ros`]
+//! (PointCloud2 in, MoveIt grasps out), [`tactile`], [`calibration`]; the value types and the
+//! perception report, which the clients convert too, are `graspd-api`'s (`graspd_api::convert`),
+//! re-exported here.
 
 mod calibration;
 mod hands;
-mod perception;
 mod plan;
 mod ros;
 mod tactile;
-mod values;
 
 pub use calibration::*;
+pub use graspd_api::convert::*;
 pub use hands::*;
 pub use plan::*;
 pub use ros::*;
 pub use tactile::*;
-pub use values::*;
 
 #[cfg(test)]
 mod tests {

@@ -4,7 +4,7 @@ use graspd_core::FieldError;
 use graspd_core::perception::{PerceptionReport, PerceptionTimings, ProbabilityMaps, TargetChoice};
 use graspd_proto::v1 as pb;
 
-pub(super) fn perception_to_proto(r: &PerceptionReport) -> pb::Perception {
+pub fn perception_to_proto(r: &PerceptionReport) -> pb::Perception {
     let t = &r.timings;
     let [u_min, v_min, u_max, v_max] = r.roi;
     pb::Perception {
@@ -38,7 +38,7 @@ pub(super) fn perception_to_proto(r: &PerceptionReport) -> pb::Perception {
     }
 }
 
-pub(super) fn perception_from_proto(
+pub fn perception_from_proto(
     r: pb::Perception,
     overlay_png: Vec<u8>,
     attention_pixel: Option<[f64; 2]>,

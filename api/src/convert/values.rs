@@ -23,11 +23,11 @@ pub fn vec3_from_proto(v: &pb::Vec3) -> Vector3<f64> {
     Vector3::new(v.x, v.y, v.z)
 }
 
-pub(super) fn point_from_proto(v: &pb::Vec3) -> Point3<f64> {
+pub fn point_from_proto(v: &pb::Vec3) -> Point3<f64> {
     Point3::new(v.x, v.y, v.z)
 }
 
-pub(super) fn required<'a, T>(v: &'a Option<T>, field: &str) -> Result<&'a T, FieldError> {
+pub fn required<'a, T>(v: &'a Option<T>, field: &str) -> Result<&'a T, FieldError> {
     v.as_ref()
         .ok_or_else(|| FieldError::new(field, "is required"))
 }
@@ -56,14 +56,14 @@ pub fn pose_from_proto(p: &Option<pb::Pose>, field: &str) -> Result<Pose, FieldE
     })
 }
 
-pub(super) fn plane_to_proto(p: &Plane) -> pb::Plane {
+pub fn plane_to_proto(p: &Plane) -> pb::Plane {
     pb::Plane {
         normal: Some(vec3_to_proto(&p.normal)),
         offset: p.offset,
     }
 }
 
-pub(super) fn plane_from_proto(p: &pb::Plane, field: &str) -> Result<Plane, FieldError> {
+pub fn plane_from_proto(p: &pb::Plane, field: &str) -> Result<Plane, FieldError> {
     let normal = required(&p.normal, &format!("{field}.normal"))?;
     Ok(Plane {
         normal: vec3_from_proto(normal),
@@ -100,7 +100,7 @@ pub fn grasp_type_from_proto(v: i32, field: &str) -> Result<Option<GraspType>, F
     })
 }
 
-pub(super) fn required_grasp_type(v: i32, field: &str) -> Result<GraspType, FieldError> {
+pub fn required_grasp_type(v: i32, field: &str) -> Result<GraspType, FieldError> {
     grasp_type_from_proto(v, field)?.ok_or_else(|| FieldError::new(field, "must be set"))
 }
 
@@ -129,14 +129,14 @@ pub fn hand_part_from_proto(v: i32, field: &str) -> Result<HandPart, FieldError>
     }
 }
 
-pub(super) fn mode_to_proto(m: PlannerMode) -> pb::PlannerMode {
+pub fn mode_to_proto(m: PlannerMode) -> pb::PlannerMode {
     match m {
         PlannerMode::DualStage => pb::PlannerMode::DualStage,
         PlannerMode::WithoutOpposition => pb::PlannerMode::WithoutOpposition,
     }
 }
 
-pub(super) fn mode_from_proto(v: i32, field: &str) -> Result<PlannerMode, FieldError> {
+pub fn mode_from_proto(v: i32, field: &str) -> Result<PlannerMode, FieldError> {
     match pb::PlannerMode::try_from(v) {
         Ok(pb::PlannerMode::DualStage) => Ok(PlannerMode::DualStage),
         Ok(pb::PlannerMode::WithoutOpposition) => Ok(PlannerMode::WithoutOpposition),
@@ -156,7 +156,7 @@ pub fn type_source_name(s: TypeSource) -> &'static str {
     }
 }
 
-pub(super) fn type_source_from_name(s: &str) -> Result<TypeSource, FieldError> {
+pub fn type_source_from_name(s: &str) -> Result<TypeSource, FieldError> {
     match s {
         "request" => Ok(TypeSource::Request),
         "geometric_rule" => Ok(TypeSource::GeometricRule),
@@ -176,7 +176,7 @@ pub fn plane_source_name(s: PlaneSource) -> &'static str {
     }
 }
 
-pub(super) fn plane_source_from_name(s: &str) -> Result<PlaneSource, FieldError> {
+pub fn plane_source_from_name(s: &str) -> Result<PlaneSource, FieldError> {
     match s {
         "request" => Ok(PlaneSource::Request),
         "detected" => Ok(PlaneSource::Detected),
@@ -185,5 +185,57 @@ pub(super) fn plane_source_from_name(s: &str) -> Result<PlaneSource, FieldError>
             "plane_source",
             format!("unknown source '{s}'"),
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_grasp_type_and_hand_part_survives_the_wire() {
+        for t in GraspType::ALL {
+            let v = grasp_type_to_proto(t) as i32;
+            assert_eq!(grasp_type_from_proto(v, "t").unwrap(), Some(t));
+            assert_eq!(required_grasp_type(v, "t").unwrap(), t);
+        }
+        assert_eq!(grasp_type_from_proto(0, "t").unwrap(), None);
+        let e = grasp_type_from_proto(99, "hints.grasp_type").unwrap_err();
+        assert_eq!(e.field, "hints.grasp_type");
+        for p in [
+            HandPart::ThumbTip,
+            HandPart::ThumbSurface,
+            HandPart::FingerTip,
+            HandPart::FingerSurface,
+            HandPart::Palm,
+        ] {
+            let v = hand_part_to_proto(p) as i32;
+            assert_eq!(hand_part_from_proto(v, "p").unwrap(), p);
+        }
+        assert_eq!(
+            hand_part_from_proto(0, "contacts[0].part")
+                .unwrap_err()
+                .field,
+            "contacts[0].part"
+        );
+    }
+
+    #[test]
+    fn a_pose_survives_the_wire_and_a_missing_part_is_named() {
+        let pose = Pose {
+            position: Point3::new(0.1, -0.2, 0.3),
+            orientation: UnitQuaternion::from_euler_angles(0.3, -0.5, 1.2),
+        };
+        let back = pose_from_proto(&Some(pose_to_proto(&pose)), "hand_pose").unwrap();
+        assert_eq!(back.position, pose.position);
+        assert!(back.orientation.angle_to(&pose.orientation) < 1e-12);
+        let mut wire = pose_to_proto(&pose);
+        wire.orientation = None;
+        let e = pose_from_proto(&Some(wire), "hand_pose").unwrap_err();
+        assert_eq!(e.field, "hand_pose.orientation");
+        assert_eq!(
+            pose_from_proto(&None, "root_pose").unwrap_err().field,
+            "root_pose"
+        );
     }
 }
