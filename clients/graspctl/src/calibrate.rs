@@ -9,9 +9,9 @@
 
 use crate::{CliError, connect_tactile};
 use clap::{Args, Subcommand};
-use graspd::facade::{CalibrationUpload, RecordingUpload};
-use graspd::grpc::convert;
 use graspd::rest::json::{CalibrationJson, CalibrationsJson, EventWindowsJson, LabelCountJson};
+use graspd_api::convert;
+use graspd_api::request::{CalibrationUpload, RecordingUpload};
 use graspd_core::FieldError;
 use graspd_core::tactile::{Baseline, ElectrodePolarity, TareConfig};
 use graspd_proto::v1 as pb;

@@ -5,43 +5,14 @@
 use super::{GraspService, ServiceError, guarded};
 use crate::calibration_store;
 use crate::hand_store::check_name;
+pub use graspd_api::request::{CalibrationInfo, CalibrationUpload, RecordingUpload};
 use graspd_core::FieldError;
 use graspd_core::tactile::{
-    Calibration, CalibrationRecording, CalibrationSettings, Recording, StabilizerConfig, TareConfig,
+    Calibration, CalibrationRecording, CalibrationSettings, Recording, StabilizerConfig,
 };
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::Arc;
-
-/// One labelled recording as the transports receive it: the `_bio.csv` text and, for frame
-/// events, the arm's `_cw.csv` and `_cv.csv` (`tactile::recording` derives them).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct RecordingUpload {
-    /// The material touched (`paper`, `foam`, `plastic`, `metal`, optionally `/kind`).
-    pub material: Option<String>,
-    pub bio_csv: String,
-    pub cw_csv: Option<String>,
-    pub cv_csv: Option<String>,
-}
-
-/// A calibration request in domain terms.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CalibrationUpload {
-    pub name: String,
-    /// Replace a calibration of this name.
-    pub replace: bool,
-    pub window_length: Option<usize>,
-    pub stride: Option<usize>,
-    pub tare: TareConfig,
-    pub recordings: Vec<RecordingUpload>,
-}
-
-/// A stored calibration and whether it is on disk.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CalibrationInfo {
-    pub calibration: Arc<Calibration>,
-    pub persisted: bool,
-}
 
 /// The calibrations by name, and where they persist.
 #[derive(Debug, Default)]

@@ -1,41 +1,14 @@
 //! Tactile stabilization: sessions, their layouts and detectors, and analysis of recordings.
 
 use super::{GraspService, ServiceError, guarded};
+pub use graspd_api::request::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
 use graspd_core::FieldError;
 use graspd_core::tactile::{
     CalibratedDetector, DetectorChoice, EventDetector, FingerConfig, Frame, FrameResult,
-    LayoutSpec, LstmDetector, ModelFreeThresholds, SensorLayout, Stabilizer, StabilizerConfig,
-    TactileModel, TareConfig,
+    LstmDetector, ModelFreeThresholds, SensorLayout, Stabilizer, StabilizerConfig, TactileModel,
 };
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// A finger's sensor layout as the transports receive it.
-#[derive(Debug, Clone, PartialEq)]
-pub enum LayoutChoice {
-    /// A built-in layout (`biotac`, `biotac_sp`).
-    Name(String),
-    /// Electrode coordinates, validated like the data files.
-    Custom(LayoutSpec),
-}
-
-/// One finger of a session request.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TactileFingerRequest {
-    pub name: String,
-    pub layout: LayoutChoice,
-    pub tare: TareConfig,
-    /// The sensor gives only its electrodes (`FingerConfig::electrodes_only`).
-    pub electrodes_only: bool,
-}
-
-/// A session request in domain terms, as both transports produce it: `config` holds every
-/// parameter except the fingers, whose layouts the facade resolves.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TactileSessionRequest {
-    pub fingers: Vec<TactileFingerRequest>,
-    pub config: StabilizerConfig,
-}
 
 /// An open tactile session: a [`Stabilizer`] holding one of the `max_tactile_sessions` slots,
 /// released when this is dropped (e.g. the moment a stream's client disconnects).
@@ -293,6 +266,7 @@ fn tactile_fit(config: &StabilizerConfig, m: &TactileModel) -> Result<(), FieldE
 mod tests {
     use super::*;
     use crate::facade::Limits;
+    use graspd_core::tactile::{LayoutSpec, TareConfig};
 
     fn tactile_request(layout: LayoutChoice) -> TactileSessionRequest {
         TactileSessionRequest {

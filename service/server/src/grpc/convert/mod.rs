@@ -4,22 +4,17 @@
 //! message as untrusted: every error names the offending field by its proto path.
 //!
 //! One file per message family: [`hands`], [`plan`] (PlanGrasp requests and responses), [`ros`]
-//! (PointCloud2 in, MoveIt grasps out), [`tactile`], [`calibration`]; the value types and the
-//! perception report, which the clients convert too, are `graspd-api`'s (`graspd_api::convert`),
-//! re-exported here.
+//! (PointCloud2 in, MoveIt grasps out); values, the perception report, tactile sessions and
+//! calibrations are `graspd-api`'s (`graspd_api::convert`), re-exported here.
 
-mod calibration;
 mod hands;
 mod plan;
 mod ros;
-mod tactile;
 
-pub use calibration::*;
 pub use graspd_api::convert::*;
 pub use hands::*;
 pub use plan::*;
 pub use ros::*;
-pub use tactile::*;
 
 #[cfg(test)]
 mod tests {

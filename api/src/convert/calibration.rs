@@ -1,7 +1,7 @@
 //! Tactile calibrations: Calibrate requests and the calibrations' descriptions.
 
 use super::tactile::{tare_from_proto, tare_to_proto};
-use crate::facade::{CalibrationInfo, CalibrationUpload, RecordingUpload};
+use crate::request::{CalibrationInfo, CalibrationUpload, RecordingUpload};
 use graspd_core::FieldError;
 use graspd_proto::v1 as pb;
 

@@ -1,6 +1,6 @@
 //! Tactile sessions, frames and stabilization setpoints (the Stabilize stream).
 
-use crate::facade::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
+use crate::request::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
 use graspd_core::FieldError;
 use graspd_core::tactile::{
     Baseline, ContactEvent, ControlMode, DesiredForceLaw, DetectorChoice, ElectrodePolarity,

@@ -1,0 +1,34 @@
+//! A calibration request in domain terms, and a stored calibration as the answers describe it.
+
+use graspd_core::tactile::{Calibration, TareConfig};
+use std::sync::Arc;
+
+/// One labelled recording as the transports receive it: the `_bio.csv` text and, for frame
+/// events, the arm's `_cw.csv` and `_cv.csv` (`tactile::recording` derives them).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RecordingUpload {
+    /// The material touched (`paper`, `foam`, `plastic`, `metal`, optionally `/kind`).
+    pub material: Option<String>,
+    pub bio_csv: String,
+    pub cw_csv: Option<String>,
+    pub cv_csv: Option<String>,
+}
+
+/// A calibration request in domain terms.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationUpload {
+    pub name: String,
+    /// Replace a calibration of this name.
+    pub replace: bool,
+    pub window_length: Option<usize>,
+    pub stride: Option<usize>,
+    pub tare: TareConfig,
+    pub recordings: Vec<RecordingUpload>,
+}
+
+/// A stored calibration and whether it is on disk.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationInfo {
+    pub calibration: Arc<Calibration>,
+    pub persisted: bool,
+}
