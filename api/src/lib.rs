@@ -7,4 +7,9 @@
 pub use graspd_proto as proto;
 
 pub mod convert;
+pub mod error;
+pub mod limits;
 pub mod request;
+
+pub use error::ServiceError;
+pub use limits::Limits;

@@ -1,8 +1,8 @@
 //! `PlanGrasp` / `POST /v1/plan` decoding at the edge: the first byte picks protobuf or JSON;
 //! the message is converted to the domain request under small limits.
 #![no_main]
-use graspd::facade::Limits;
-use graspd::grpc::convert::plan_request_from_proto;
+use graspd_api::Limits;
+use graspd_api::convert::plan_request_from_proto;
 use graspd::rest::json::{self, PlanRequestJson, plan_request_from_json};
 use graspd_proto::v1 as pb;
 use libfuzzer_sys::fuzz_target;

@@ -3,7 +3,7 @@
 //! opened and stepped through the facade exactly as the transports do.
 #![no_main]
 use graspd::facade::{GraspService, Limits};
-use graspd::grpc::convert;
+use graspd_api::convert;
 use graspd::rest::json::{self, AnalyzeRequestJson};
 use graspd_core::hand::HandCatalog;
 use graspd_proto::v1 as pb;

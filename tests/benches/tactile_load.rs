@@ -20,8 +20,8 @@
 //! frames each period); `--staggered` spreads session i's schedule i/N of a period later, as
 //! independent clients would be.
 
-use graspd::facade::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
-use graspd::grpc::convert;
+use graspd_api::convert;
+use graspd_api::request::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
 use graspd_core::tactile::{DetectorChoice, Frame, Recording, StabilizerConfig, TareConfig};
 use graspd_e2e::{Server, bench_arg, release_graspd};
 use graspd_proto::v1 as pb;

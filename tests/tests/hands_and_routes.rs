@@ -1,7 +1,7 @@
 //! ListHands / GetHand round trips over gRPC and REST, registration without a model, health and
 //! unknown routes.
 
-use graspd::grpc::convert::hand_from_proto;
+use graspd_api::convert::hand_from_proto;
 use graspd_core::HandDescription;
 use graspd_e2e::{Server, http, rest_error};
 use graspd_proto::v1 as pb;

@@ -4,9 +4,9 @@
 //! plan, the overlay comes back as a PNG (REST `?format=png`, graspctl --overlay), and bad frames
 //! get field-named errors without harming the next request.
 
-use graspd::grpc::convert::plan_from_proto;
 use graspd::grpc::status::FIELD_METADATA_KEY;
 use graspd::rest::json::PlanResponseJson;
+use graspd_api::convert::plan_from_proto;
 use graspd_core::GraspPlan;
 use graspd_core::perception::TargetChoice;
 use graspd_e2e::{

@@ -4,7 +4,7 @@
 //! refused naming the field, and the next request works; `output.moveit_grasps` returns each
 //! ranked candidate in the layout of `moveit_msgs/Grasp`, the same over both transports.
 
-use graspd::grpc::convert::cloud2_to_proto;
+use graspd_api::convert::cloud2_to_proto;
 use graspd_core::cloud::PointCloud;
 use graspd_e2e::{
     Server, assert_valid_plan_works, base64, cylinder, grpc_request, http, json_request,

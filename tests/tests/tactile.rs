@@ -6,8 +6,8 @@
 //! a session asking for a model the server has not loaded is refused naming the field, and a
 //! `--tactile-model` file that does not load stops the start.
 
-use graspd::facade::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
-use graspd::grpc::convert;
+use graspd_api::convert;
+use graspd_api::request::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
 use graspd_core::tactile::stabilizer::LATCH_STEP_S;
 use graspd_core::tactile::{Frame, Recording, StabilizerConfig, TareConfig};
 use graspd_e2e::{Server, assert_valid_plan_works, http, refused_naming, rest_error};

@@ -5,8 +5,8 @@
 //! refused naming the field and store nothing; a session that does not fit the calibration is
 //! refused naming the field; DELETE removes it from disk.
 
-use graspd::facade::{CalibrationUpload, RecordingUpload};
-use graspd::grpc::convert;
+use graspd_api::convert;
+use graspd_api::request::{CalibrationUpload, RecordingUpload};
 use graspd_core::tactile::TareConfig;
 use graspd_e2e::{Server, http, refused_naming, rest_error};
 use graspd_proto::v1 as pb;

@@ -6,9 +6,9 @@ mod stabilize;
 mod summary;
 
 use clap::{Args, Parser, Subcommand};
-use graspd::grpc::convert;
 use graspd::rest::json::{HandJson, HandsJson, PlanResponseJson};
-use graspd::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
+use graspd_api::convert;
+use graspd_api::request::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
 use graspd_core::cloud::Plane;
 use graspd_core::cloud::io::read_cloud_file;
 use graspd_core::hand::parse_hand_toml;

@@ -10,6 +10,7 @@
 //! system): a failed registration leaves nothing behind, a crash at worst a `.tmp-*` folder,
 //! which the next start removes.
 
+pub use graspd_api::request::{Asset, HandUpload, ModelFormat, StoredOverrides, check_name};
 use graspd_core::FieldError;
 use graspd_core::hand::kinematics::{HandOverrides, KinematicHand, mjcf, urdf};
 use graspd_core::planning::KinematicModel;
@@ -17,71 +18,6 @@ use serde::{Deserialize, Serialize};
 use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
-
-/// The document format of a hand model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ModelFormat {
-    Mjcf,
-    Urdf,
-}
-
-impl ModelFormat {
-    /// Parses `mjcf` / `urdf` (case-insensitive); `field` names the value in errors.
-    pub fn parse(s: &str, field: &str) -> Result<Self, FieldError> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "mjcf" | "mujoco" => Ok(ModelFormat::Mjcf),
-            "urdf" => Ok(ModelFormat::Urdf),
-            "" => Err(FieldError::new(field, "missing: give 'mjcf' or 'urdf'")),
-            other => Err(FieldError::new(
-                field,
-                format!(
-                    "unknown format '{}' (give 'mjcf' or 'urdf')",
-                    other.escape_debug()
-                ),
-            )),
-        }
-    }
-
-    /// From a file name's extension (`.xml` → MJCF, `.urdf` → URDF).
-    pub fn from_path(path: &Path) -> Option<Self> {
-        match path.extension()?.to_str()?.to_ascii_lowercase().as_str() {
-            "xml" | "mjcf" => Some(ModelFormat::Mjcf),
-            "urdf" => Some(ModelFormat::Urdf),
-            _ => None,
-        }
-    }
-}
-
-/// Overrides of the palm/finger/thumb detection, as stored and uploaded.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct StoredOverrides {
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub palm: Option<String>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub fingertips: Option<Vec<String>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub thumb: Option<String>,
-}
-
-impl StoredOverrides {
-    /// The overrides a registration asks for, as either transport received them: an empty
-    /// name or list means "detect it".
-    pub fn requested(palm: Option<String>, fingertips: Vec<String>, thumb: Option<String>) -> Self {
-        let name = |s: Option<String>| s.map(|s| s.trim().to_string()).filter(|s| !s.is_empty());
-        let fingertips: Vec<String> = fingertips
-            .into_iter()
-            .map(|s| s.trim().to_string())
-            .filter(|s| !s.is_empty())
-            .collect();
-        Self {
-            palm: name(palm),
-            fingertips: (!fingertips.is_empty()).then_some(fingertips),
-            thumb: name(thumb),
-        }
-    }
-}
 
 /// `hand.toml` of a registered hand.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -95,55 +31,6 @@ pub struct Manifest {
     pub overrides: StoredOverrides,
 }
 
-/// One uploaded file.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Asset {
-    /// Relative path (as the model refers to it), `/`-separated.
-    pub path: String,
-    pub data: Vec<u8>,
-}
-
-/// A registration request in domain terms.
-#[derive(Debug, Clone, PartialEq)]
-pub struct HandUpload {
-    pub name: String,
-    pub format: ModelFormat,
-    /// The model document.
-    pub text: String,
-    pub assets: Vec<Asset>,
-    pub overrides: StoredOverrides,
-}
-
-impl HandUpload {
-    /// The registration rules both transports share, on what they decoded: a parametric
-    /// description (`parametric`) is not registered, a model document is required; `model`
-    /// gives its format (named, or as `ModelFormat::parse` reads it), text, assets and
-    /// overrides. Errors name the field.
-    pub fn from_request(
-        name: String,
-        parametric: bool,
-        model: Option<(ModelFormat, String, Vec<Asset>, StoredOverrides)>,
-    ) -> Result<Self, FieldError> {
-        if parametric {
-            return Err(FieldError::new(
-                "hand",
-                "parametric descriptions are not registered; send them inline as \
-                 hand_description with each plan, or register a robot description in model",
-            ));
-        }
-        let (format, text, assets, overrides) = model.ok_or_else(|| {
-            FieldError::new("model", "missing: give the hand's MJCF or URDF document")
-        })?;
-        Ok(Self {
-            name,
-            format,
-            text,
-            assets,
-            overrides,
-        })
-    }
-}
-
 /// A hand read from its model: the kinematics and the description derived from them.
 #[derive(Debug, Clone)]
 pub struct LoadedHand {
@@ -155,28 +42,6 @@ pub struct LoadedHand {
 pub const MANIFEST: &str = "hand.toml";
 /// File name the uploaded model document is stored under (assets keep their own paths).
 const MODEL_FILE: &str = "model";
-
-/// Checks a hand name: 1–64 ASCII letters, digits, `_`, `-`, `.`, not starting with `.`.
-pub fn check_name(name: &str, field: &str) -> Result<(), FieldError> {
-    if name.is_empty() {
-        return Err(FieldError::new(field, "missing: give the hand a name"));
-    }
-    if name.len() > 64
-        || name.starts_with('.')
-        || !name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
-    {
-        return Err(FieldError::new(
-            field,
-            format!(
-                "'{}' is not a valid hand name (1-64 of A-Z a-z 0-9 _ - ., not starting with '.')",
-                name.escape_debug()
-            ),
-        ));
-    }
-    Ok(())
-}
 
 /// A relative path without `..`, root, drive or empty parts; `field` names it in errors.
 pub fn check_relative_path(path: &str, field: &str) -> Result<PathBuf, FieldError> {

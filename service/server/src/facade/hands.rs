@@ -3,20 +3,11 @@
 use super::validate::rename_hand_field;
 use super::{GraspService, HandChoice, Hands, ServiceError, guarded};
 use crate::hand_store::{self, HandUpload};
+pub use graspd_api::request::RegisteredHand;
 use graspd_core::planning::KinematicModel;
 use graspd_core::{FieldError, HandDescription};
 use std::path::PathBuf;
 use std::sync::Arc;
-
-/// The answer to a registration.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RegisteredHand {
-    pub description: HandDescription,
-    /// Joint names of the model, in the order plans list them.
-    pub joints: Vec<String>,
-    /// Stored in the hands directory (else in memory only).
-    pub persisted: bool,
-}
 
 /// Hands to load at start (configuration).
 #[derive(Debug, Clone, Default, PartialEq)]

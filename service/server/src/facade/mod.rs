@@ -2,11 +2,12 @@
 //! validation of a plan request before it reaches the planner. Plain Rust and synchronous (no
 //! tonic, axum, tokio or proto types), so it also serves as the library entry point.
 //!
-//! One file per concern: [`request`] (a plan request in domain terms), [`validate`] (the request
-//! rules the facade owns; the options' ranges are `PlannerOptions::validate`'s), [`limits`]
-//! (configured bounds, the CPU cap on options included), [`plan`], [`hands`] (catalog and
-//! registration), [`tactile`] (sessions and analysis), [`calibrations`] (tactile calibrations:
-//! fit, store, name), [`error`].
+//! One file per concern: [`validate`] (the request rules the facade owns; the options' ranges
+//! are `PlannerOptions::validate`'s), [`plan`], [`hands`] (catalog and registration),
+//! [`tactile`] (sessions and analysis), [`calibrations`] (tactile calibrations: fit, store,
+//! name). The requests and answers it takes and gives, its `Limits` (configured bounds, the CPU
+//! cap on options included) and its `ServiceError` are `graspd-api`'s, so that the clients
+//! build the same ones.
 
 use crate::hand_store;
 use graspd_core::HandCatalog;
@@ -20,22 +21,19 @@ use std::sync::atomic::AtomicUsize;
 use std::sync::{Arc, RwLock};
 
 mod calibrations;
-mod error;
 mod hands;
-mod limits;
 mod plan;
-mod request;
 mod tactile;
 mod validate;
 
 pub use calibrations::{CalibrationInfo, CalibrationUpload, RecordingUpload};
-pub use error::ServiceError;
-pub use hands::{HandSetup, RegisteredHand};
-pub use limits::{
+pub use graspd_api::ServiceError;
+pub use graspd_api::limits::{
     DEFAULT_MAX_ITERATIONS, DEFAULT_MAX_TACTILE_SESSIONS, DEFAULT_MAX_VIEWS, Limits,
     QUEUED_PLANS_PER_PLANNER,
 };
-pub use request::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
+pub use graspd_api::request::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
+pub use hands::{HandSetup, RegisteredHand};
 pub use tactile::{LayoutChoice, TactileFingerRequest, TactileSession, TactileSessionRequest};
 
 /// The grasp-planning service. Cheap to clone (shared state).

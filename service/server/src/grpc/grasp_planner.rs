@@ -1,9 +1,9 @@
 //! The `graspd.v1.GraspPlanner` service: decode, call the facade, encode.
 
-use super::convert;
 use super::status::to_status;
 use crate::ops::Transport;
 use crate::runner::PlanRunner;
+use graspd_api::convert;
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::grasp_planner_server::GraspPlanner;
 use tonic::{Request, Response, Status};

@@ -1,6 +1,5 @@
 //! The gRPC transport: one file per service, one conversion module, thin over the facade.
 
-pub mod convert;
 pub mod grasp_planner;
 pub mod status;
 pub mod tactile_stabilizer;

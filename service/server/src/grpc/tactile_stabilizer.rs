@@ -8,11 +8,11 @@
 //! field. When the client goes away the response stream is dropped, the task notices at once
 //! (even while it waits for a frame) and the session, with its slot, is dropped.
 
-use super::convert;
 use super::status::to_status;
 use crate::facade::{GraspService, ServiceError};
 use crate::ops::Transport;
 use crate::runner::PlanRunner;
+use graspd_api::convert;
 use graspd_core::FieldError;
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::tactile_stabilizer_server::TactileStabilizer;

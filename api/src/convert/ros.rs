@@ -1,8 +1,8 @@
 //! ROS layouts (`ros.proto`): `sensor_msgs/PointCloud2` in, `moveit_msgs/Grasp` out — the rules
 //! live in core (`cloud::io::pointcloud2`, `planning::moveit_layout`); this maps the messages.
 
-use crate::facade::{Limits, ServiceError};
-use graspd_api::convert::values::*;
+use super::values::*;
+use crate::{Limits, ServiceError};
 use graspd_core::FieldError;
 use graspd_core::cloud::PointCloud;
 use graspd_core::cloud::io::{PointCloud2Layout, PointField, read_pointcloud2, write_pointcloud2};

@@ -49,7 +49,7 @@ impl ImageHints {
     }
 
     /// The segmentation's target hint; errors name the conflicting hint.
-    pub(super) fn target(&self) -> Result<TargetHint, FieldError> {
+    pub fn target(&self) -> Result<TargetHint, FieldError> {
         match (self.attention_pixel, self.region) {
             (Some(_), Some(_)) => Err(FieldError::new(
                 "hints.region",

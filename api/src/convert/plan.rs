@@ -2,12 +2,11 @@
 //! joints, quality, candidates, the plan).
 
 use super::hands::*;
+use super::perception::*;
 use super::ros::*;
-use crate::facade::{
-    HandChoice, ImageHints, Limits, OutputOptions, PlanRequest, PlanSource, ServiceError,
-};
-use graspd_api::convert::perception::*;
-use graspd_api::convert::values::*;
+use super::values::*;
+use crate::request::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
+use crate::{Limits, ServiceError};
 use graspd_core::cloud::{PointCloud, decode_packed_vec3, decode_packed_xyz, encode_packed_xyz};
 use graspd_core::perception::{CameraIntrinsics, RgbdFrame, WireImage, camera_pose};
 use graspd_core::planning::{

@@ -1,8 +1,7 @@
 //! Hand descriptions and RegisterHand requests and responses.
 
-use crate::facade::RegisteredHand;
-use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
-use graspd_api::convert::values::*;
+use super::values::*;
+use crate::request::{Asset, HandUpload, ModelFormat, RegisteredHand, StoredOverrides};
 use graspd_core::hand::{Finger, GraspRealisation, HandGeometry, TypeEquivalence};
 use graspd_core::{FieldError, HandDescription};
 use graspd_proto::v1 as pb;
