@@ -32,9 +32,9 @@ pub const DEFAULT_MAX_ITERATIONS: usize = 100_000;
 impl Limits {
     /// A cloud of `n` points (as its message claims, before reading them) within `max_points`;
     /// else TooLarge naming `field`.
-    pub fn check_points(&self, n: u64, field: &str) -> Result<(), crate::ServiceError> {
+    pub fn check_points(&self, n: u64, field: &str) -> Result<(), crate::error::ServiceError> {
         if n > self.max_points as u64 {
-            return Err(crate::ServiceError::TooLarge(FieldError::new(
+            return Err(crate::error::ServiceError::TooLarge(FieldError::new(
                 field,
                 format!(
                     "{n} points exceed the configured limit of {} (max_points)",

@@ -3,7 +3,7 @@
 #![no_main]
 use graspd_api::Limits;
 use graspd_api::convert::plan_request_from_proto;
-use graspd::rest::json::{self, PlanRequestJson, plan_request_from_json};
+use graspd_api::json::{self, PlanRequestJson, plan_request_from_json};
 use graspd_proto::v1 as pb;
 use libfuzzer_sys::fuzz_target;
 use prost::Message;

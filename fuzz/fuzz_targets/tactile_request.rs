@@ -4,7 +4,7 @@
 #![no_main]
 use graspd::facade::{GraspService, Limits};
 use graspd_api::convert;
-use graspd::rest::json::{self, AnalyzeRequestJson};
+use graspd_api::json::{self, AnalyzeRequestJson};
 use graspd_core::hand::HandCatalog;
 use graspd_proto::v1 as pb;
 use libfuzzer_sys::fuzz_target;

@@ -16,9 +16,9 @@ const LAYERS: [(&str, u8); 9] = [
     ("graspd-testkit", 1),
     ("graspd", 2),
     ("graspd-grasp-type-data", 2),
-    ("graspctl", 3),
-    ("graspd-sim", 3),
-    ("graspd-e2e", 4),
+    ("graspctl", 2),
+    ("graspd-sim", 2),
+    ("graspd-e2e", 3),
 ];
 
 /// Crates of the transports, which the domain crate must not use.

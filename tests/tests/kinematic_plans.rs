@@ -6,8 +6,8 @@
 //! `candidates` the pre-grasp, squeeze, approach and ranked candidates come back the same over
 //! gRPC and REST.
 
-use graspd::rest::json::PlanResponseJson;
 use graspd_api::convert::plan_from_proto;
+use graspd_api::json::PlanResponseJson;
 use graspd_core::hand::kinematics::KinematicHand;
 use graspd_e2e::{Server, base64, http, packed, without_timings};
 use graspd_proto::v1 as pb;

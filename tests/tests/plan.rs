@@ -1,8 +1,8 @@
 //! Planning through the real server: a valid plan via gRPC, REST JSON and multipart upload, and
 //! the same plan through both transports for the same seed.
 
-use graspd::rest::json::PlanResponseJson;
 use graspd_api::convert::plan_from_proto;
+use graspd_api::json::PlanResponseJson;
 use graspd_core::GraspType;
 use graspd_core::cloud::io::write_ply_binary;
 use graspd_e2e::{Server, cylinder, grpc_request, http, json_request, without_timings};

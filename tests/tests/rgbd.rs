@@ -5,8 +5,8 @@
 //! get field-named errors without harming the next request.
 
 use graspd::grpc::status::FIELD_METADATA_KEY;
-use graspd::rest::json::PlanResponseJson;
 use graspd_api::convert::plan_from_proto;
+use graspd_api::json::PlanResponseJson;
 use graspd_core::GraspPlan;
 use graspd_core::perception::TargetChoice;
 use graspd_e2e::{

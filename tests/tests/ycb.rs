@@ -3,8 +3,8 @@
 //! hands. Contacts lie on the cloud, their count matches the hand and type, the opposition is
 //! opposed, S ≥ ε or the plan says why not, and both transports return the same plan.
 
-use graspd::rest::json::PlanResponseJson;
 use graspd_api::convert::plan_from_proto;
+use graspd_api::json::PlanResponseJson;
 use graspd_core::HandCatalog;
 use graspd_e2e::{Server, base64, http, packed, without_timings};
 use graspd_proto::v1 as pb;

@@ -24,7 +24,7 @@ pub use values::*;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Limits;
+    use crate::limits::Limits;
     use graspd_core::HandCatalog;
     use graspd_core::PlannerOptions;
     use graspd_core::planning::PlannerMode;

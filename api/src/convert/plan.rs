@@ -5,8 +5,9 @@ use super::hands::*;
 use super::perception::*;
 use super::ros::*;
 use super::values::*;
+use crate::error::ServiceError;
+use crate::limits::Limits;
 use crate::request::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
-use crate::{Limits, ServiceError};
 use graspd_core::cloud::{PointCloud, decode_packed_vec3, decode_packed_xyz, encode_packed_xyz};
 use graspd_core::perception::{CameraIntrinsics, RgbdFrame, WireImage, camera_pose};
 use graspd_core::planning::{

@@ -2,7 +2,8 @@
 //! live in core (`cloud::io::pointcloud2`, `planning::moveit_layout`); this maps the messages.
 
 use super::values::*;
-use crate::{Limits, ServiceError};
+use crate::error::ServiceError;
+use crate::limits::Limits;
 use graspd_core::FieldError;
 use graspd_core::cloud::PointCloud;
 use graspd_core::cloud::io::{PointCloud2Layout, PointField, read_pointcloud2, write_pointcloud2};

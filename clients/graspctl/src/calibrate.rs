@@ -9,8 +9,8 @@
 
 use crate::{CliError, connect_tactile};
 use clap::{Args, Subcommand};
-use graspd::rest::json::{CalibrationJson, CalibrationsJson, EventWindowsJson, LabelCountJson};
 use graspd_api::convert;
+use graspd_api::json::{CalibrationJson, CalibrationsJson, EventWindowsJson, LabelCountJson};
 use graspd_api::request::{CalibrationUpload, RecordingUpload};
 use graspd_core::FieldError;
 use graspd_core::tactile::{Baseline, ElectrodePolarity, TareConfig};

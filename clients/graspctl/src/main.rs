@@ -6,8 +6,8 @@ mod stabilize;
 mod summary;
 
 use clap::{Args, Parser, Subcommand};
-use graspd::rest::json::{HandJson, HandsJson, PlanResponseJson};
 use graspd_api::convert;
+use graspd_api::json::{HandJson, HandsJson, PlanResponseJson};
 use graspd_api::request::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
 use graspd_core::cloud::Plane;
 use graspd_core::cloud::io::read_cloud_file;

@@ -8,8 +8,8 @@
 
 use crate::CliError;
 use clap::Args;
-use graspd::rest::json::{self, AnalyzeCsvQuery, SetpointJson};
 use graspd_api::convert;
+use graspd_api::json::{self, AnalyzeCsvQuery, SetpointJson};
 use graspd_core::tactile::{
     ContactEvent, ControlMode, ElectrodePolarity, FrameResult, Material, Recording,
 };

@@ -1,5 +1,5 @@
-//! The REST transport (axum): routes, one JSON conversion module, typed errors. Thin over the
-//! facade.
+//! The REST transport (axum): routes and typed errors, thin over the facade; the bodies and
+//! their conversions are `graspd-api`'s ([`json`], [`schemas`]).
 
 pub mod body;
 pub mod calibrations;
@@ -7,12 +7,12 @@ pub mod console;
 mod drain;
 pub mod error;
 pub mod hands;
-pub mod json;
 pub mod openapi;
 pub mod plan;
-pub mod schemas;
 pub mod stabilize;
 pub mod tactile;
+
+pub use graspd_api::{json, schemas};
 
 use crate::ops::edge::{EdgeHooks, EdgeLayer};
 use crate::ops::{Ops, Transport, metrics};

@@ -1,7 +1,7 @@
 //! The perception report of a plan from RGB-D input, and the grasp-type model's maps.
 
 use super::values::RegionJson;
-use crate::rest::schemas::{PerceptionTimingsDoc, TargetChoiceDoc};
+use crate::schemas::{PerceptionTimingsDoc, TargetChoiceDoc};
 use base64::Engine;
 use graspd_core::perception::{PerceptionReport, PerceptionTimings, TargetChoice};
 use serde::{Deserialize, Serialize};

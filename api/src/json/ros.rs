@@ -4,7 +4,8 @@
 //! (`cloud::io::pointcloud2`, `planning::moveit_layout`).
 
 use super::values::{PoseJson, Vec3Json};
-use crate::facade::{Limits, ServiceError};
+use crate::error::ServiceError;
+use crate::limits::Limits;
 use base64::Engine;
 use graspd_core::cloud::PointCloud;
 use graspd_core::cloud::io::{PointCloud2Layout, PointField, read_pointcloud2};

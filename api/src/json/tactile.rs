@@ -1,9 +1,7 @@
 //! Tactile sessions, frames, `POST /v1/tactile/analyze` and the stabilize stream's messages.
 
-use crate::facade::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
-use crate::rest::schemas::{
-    DetectorDoc, ElectrodePolarityDoc, FrameResultDoc, LayoutDoc, PidGainsDoc,
-};
+use crate::request::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
+use crate::schemas::{DetectorDoc, ElectrodePolarityDoc, FrameResultDoc, LayoutDoc, PidGainsDoc};
 use graspd_core::tactile::{
     Baseline, DesiredForceLaw, DetectorChoice, ElectrodePolarity, FingerReading, Frame,
     FrameResult, LayoutSpec, ModelFreeThresholds, PidGains, StabilizerConfig, TareConfig,

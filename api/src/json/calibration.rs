@@ -1,8 +1,8 @@
 //! `POST /v1/tactile/calibrations` and the calibrations' descriptions.
 
 use super::tactile::{TareJson, tare_from_json};
-use crate::facade::{CalibrationInfo, CalibrationUpload, RecordingUpload};
-use crate::rest::schemas::TareConfigDoc;
+use crate::request::{CalibrationInfo, CalibrationUpload, RecordingUpload};
+use crate::schemas::TareConfigDoc;
 use graspd_core::tactile::TareConfig;
 use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;

@@ -3,7 +3,7 @@
 //! in `graspd_core`, which knows nothing of transports, so they are described here: enums by
 //! their serialised names (a new variant fails to compile until it is listed), report structs
 //! by the serde form of a value of them (property names and JSON types, none marked required),
-//! and the rest as objects with a pointer to their documentation. [`super::json`]'s DTOs name
+//! and the rest as objects with a pointer to their documentation. [`crate::json`]'s DTOs name
 //! them in `#[schema(value_type = …)]`.
 
 use graspd_core::perception::{PerceptionTimings, TargetChoice};

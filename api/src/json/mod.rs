@@ -84,7 +84,8 @@ pub struct ErrorDetailJson {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::facade::{Limits, PlanSource};
+    use crate::limits::Limits;
+    use crate::request::PlanSource;
     use base64::Engine;
     use nalgebra::Point3;
 

@@ -3,10 +3,10 @@
 use super::perception::*;
 use super::ros::*;
 use super::values::*;
-use crate::facade::{
-    HandChoice, ImageHints, Limits, OutputOptions, PlanRequest, PlanSource, ServiceError,
-};
-use crate::rest::schemas::{
+use crate::error::ServiceError;
+use crate::limits::Limits;
+use crate::request::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
+use crate::schemas::{
     CollisionReportDoc, GraspTypeDoc, HandDescriptionDoc, HandPartDoc, PlaneSourceDoc,
     PlannerModeDoc, PlannerOptionsDoc, QualityDoc, StageStatsDoc, TimingsDoc, TypeSourceDoc,
     Vec3InputDoc, Vec3ListDoc,

@@ -1,8 +1,8 @@
 //! `GET /v1/hands`, `GET /v1/hands/{name}` and `POST /v1/hands` (registration).
 
-use crate::facade::RegisteredHand;
-use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
-use crate::rest::schemas::{GraspTypeDoc, HandDescriptionDoc};
+use crate::request::RegisteredHand;
+use crate::request::{Asset, HandUpload, ModelFormat, StoredOverrides};
+use crate::schemas::{GraspTypeDoc, HandDescriptionDoc};
 use base64::Engine;
 use graspd_core::{FieldError, GraspType, HandDescription};
 use serde::{Deserialize, Serialize};

@@ -1,6 +1,6 @@
 //! Positions (`{x, y, z}` or `[x, y, z]`), quaternions, poses, planes and pixel regions.
 
-use crate::rest::schemas::Vec3InputDoc;
+use crate::schemas::Vec3InputDoc;
 use graspd_core::cloud::Plane;
 use graspd_core::planning::Pose;
 use nalgebra::{Point3, Vector3};
