@@ -1,5 +1,5 @@
 //! The `graspd.v1` gRPC API generated from `proto/graspd/v1/*.proto`. Conversions to the domain
-//! types live with the server (`graspd::grpc::convert`), not here, so this crate stays a pure
+//! types live in `graspd-api` (`graspd_api::convert`), not here, so this crate stays a pure
 //! wire-format crate that any client can use.
 
 /// Package `graspd.v1`.
