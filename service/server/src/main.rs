@@ -54,7 +54,12 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    match runtime.block_on(server::run(&settings, server::shutdown_signal())) {
+    // The signal handlers are installed before anything listens (`shutdown_signal`).
+    let shutdown = {
+        let _runtime = runtime.enter();
+        server::shutdown_signal()
+    };
+    match runtime.block_on(server::run(&settings, shutdown)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             tracing::error!(error = %e, "graspd failed");
