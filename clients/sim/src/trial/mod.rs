@@ -366,15 +366,7 @@ fn execute(
     let commands = if trial.scene.balanced_grip {
         crate::closing::within_force_limits(&trial.scene.model, &grasp, &closed)
     } else {
-        let f = std::env::var("XGRIP")
-            .ok()
-            .and_then(|v| v.parse::<f64>().ok())
-            .unwrap_or(1.0);
-        grasp
-            .iter()
-            .zip(&closed)
-            .map(|(g, c)| g + f * (c - g))
-            .collect()
+        closed.clone()
     };
     let at_touch = crate::closing::close(trial, &grasp, &commands, opts.guarded_close);
     if opts.grip_reflex {
