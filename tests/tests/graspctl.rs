@@ -338,3 +338,65 @@ fn tactile_calibrate_then_stabilize_with_the_calibration() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `graspctl tactile calibrate --all-csv` on a copy of BioTac SP direction-of-slip sequences
+/// (electrodes only, files not named `*_bio.csv`) labelled by folder with an event
+/// (`t,,contact`, `n,,slip`): the calibration is electrodes only and counts both events.
+#[test]
+fn tactile_calibrate_an_electrodes_only_sensor_by_event() {
+    let server = Server::start();
+    let dos = graspd_testkit::testdata_dir().join("tactile/biotac_sp/dos_basic");
+    let dir = std::env::temp_dir().join(format!("graspd-e2e-calibrate-sp-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut copied = 0;
+    for label in ["t", "n"] {
+        std::fs::create_dir_all(dir.join(label)).unwrap();
+        let mut files: Vec<_> = std::fs::read_dir(dos.join(label))
+            .unwrap()
+            .flatten()
+            .map(|e| e.path())
+            .collect();
+        files.sort();
+        for f in files.iter().take(6) {
+            std::fs::copy(f, dir.join(label).join(f.file_name().unwrap())).unwrap();
+            copied += 1;
+        }
+    }
+    std::fs::write(dir.join("labels.csv"), "t,,contact\nn,,slip\n").unwrap();
+    let calibrate = |extra: &[&str]| {
+        let mut args = vec![
+            "tactile",
+            "calibrate",
+            dir.to_str().unwrap(),
+            "--name",
+            "sp",
+        ];
+        args.extend_from_slice(extra);
+        graspctl(&server, &args)
+    };
+    // The files are not *_bio.csv: without --all-csv there is nothing to fit.
+    let out = calibrate(&[]);
+    assert!(!out.status.success());
+    assert!(
+        text(&out.stderr).contains("--all-csv"),
+        "{}",
+        text(&out.stderr)
+    );
+    let out = calibrate(&["--all-csv"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let summary = text(&out.stdout);
+    assert!(
+        summary.starts_with("sp: 24 electrodes (electrodes only)"),
+        "{summary}"
+    );
+    assert!(
+        summary.contains(&format!("{copied} recordings")),
+        "{summary}"
+    );
+    assert!(summary.contains("material windows: none"), "{summary}");
+    assert!(
+        summary.contains("non-contact 0, contact ") && !summary.contains("slip 0\n"),
+        "{summary}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -33,6 +33,7 @@ fn upload(name: &str) -> CalibrationUpload {
                 bio_csv: read(mat, sample, "bio"),
                 cw_csv: Some(read(mat, sample, "cw")),
                 cv_csv: Some(read(mat, sample, "cv")),
+                event: None,
             });
         }
     }
@@ -216,6 +217,21 @@ async fn bad_calibrations_and_sessions_that_do_not_fit_are_refused_naming_the_fi
             "both",
         ),
         (
+            json!({"name": "x", "recordings": [rec("foam"), {"material": "metal", "bio_csv": bio, "event": "slide"}]}),
+            "recordings[1].event",
+            "unknown event 'slide'",
+        ),
+        (
+            json!({"name": "x", "recordings": [rec("foam"), {"material": "metal", "bio_csv": bio, "event": "slip", "cw_csv": "timestamp,fx,fy,fz,tx,ty,tz\n", "cv_csv": "timestamp,x,y,z,a,b,c\n"}]}),
+            "recordings[1].event",
+            "not both",
+        ),
+        (
+            json!({"name": "x", "recordings": [rec("foam"), {"material": "metal", "bio_csv": "ff_e1,ff_e2\n3000,2900\n"}]}),
+            "recordings[1].bio_csv",
+            "one calibration is of one sensor",
+        ),
+        (
             json!({"name": "../x", "recordings": [rec("foam"), rec("metal")]}),
             "name",
             "not a valid",
@@ -264,6 +280,10 @@ async fn bad_calibrations_and_sessions_that_do_not_fit_are_refused_naming_the_fi
         (
             json!({"detector": {"calibration": "slide"}, "fingers": [{"name": "ff", "layout": "biotac_sp", "tare": {"pretared": true}}]}),
             "session.fingers[0].layout",
+        ),
+        (
+            json!({"detector": {"calibration": "slide"}, "fingers": [{"name": "ff", "layout": "biotac", "tare": {"pretared": true}, "electrodes_only": true}]}),
+            "session.fingers[0].electrodes_only",
         ),
     ] {
         let mut s =
@@ -314,4 +334,91 @@ async fn bad_calibrations_and_sessions_that_do_not_fit_are_refused_naming_the_fi
         e.message()
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The BioTac SP direction-of-slip recordings (../shared/testdata/tactile/biotac_sp/dos_basic,
+/// measurement only): electrodes only, no time stamps.
+fn dos(label: &str, object: &str, k: usize) -> String {
+    let dir = graspd_testkit::testdata_dir()
+        .join("tactile/biotac_sp/dos_basic")
+        .join(label);
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| Some(e.ok()?.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with(object))
+        })
+        .collect();
+    files.sort();
+    std::fs::read_to_string(&files[k]).unwrap()
+}
+
+/// A sensor that gives only its electrodes: a calibration fitted over REST on real BioTac SP
+/// held touches (event contact) and slides (event slip) of three objects is electrodes only;
+/// a session of an electrodes_only finger naming it reports slip on a slide of the fourth
+/// object in more of its frames than on a held touch of it.
+#[tokio::test]
+async fn an_electrodes_only_calibration_tells_slides_from_touches() {
+    let server = Server::start();
+    let mut recordings = Vec::new();
+    for object in ["case", "hd", "sponge"] {
+        for k in 0..4 {
+            recordings.push(json!({"bio_csv": dos("t", object, k), "event": "contact"}));
+            for label in ["n", "s", "cw"] {
+                recordings.push(json!({"bio_csv": dos(label, object, k), "event": "slip"}));
+            }
+        }
+    }
+    let response = http()
+        .post(server.rest_url("/v1/tactile/calibrations"))
+        .json(&json!({"name": "sp", "recordings": recordings}))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 201);
+    let info: serde_json::Value = response.json().await.unwrap();
+    assert_eq!(
+        (&info["electrodes"], &info["electrodes_only"]),
+        (&json!(24), &json!(true)),
+        "{info}"
+    );
+    assert_eq!(info["material_windows"], json!([]), "{info}");
+    let slip_frames = |csv: String| {
+        let server = &server;
+        async move {
+            let session = json!({
+                "fingers": [{"name": "ff", "layout": "biotac_sp", "electrodes_only": true}],
+                "detector": {"calibration": "sp"},
+            });
+            let form = reqwest::multipart::Form::new()
+                .part(
+                    "bio_csv",
+                    reqwest::multipart::Part::text(csv).file_name("pen.csv"),
+                )
+                .text("session", session.to_string());
+            let response = http()
+                .post(server.rest_url("/v1/tactile/analyze"))
+                .multipart(form)
+                .send()
+                .await
+                .unwrap();
+            assert_eq!(response.status(), 200);
+            let body: serde_json::Value = response.json().await.unwrap();
+            let frames = body["frames"].as_array().unwrap();
+            let slip = frames
+                .iter()
+                .filter(|f| f["fingers"][0]["event"] == "slip")
+                .count();
+            (slip, frames.len())
+        }
+    };
+    let (touch, n) = slip_frames(dos("t", "pen", 0)).await;
+    let (slide, m) = slip_frames(dos("n", "pen", 0)).await;
+    assert!(n > 200 && m > 200, "{n} and {m} frames");
+    assert!(
+        slide > touch,
+        "slip in {slide} of {m} slide frames, {touch} of {n} touch frames"
+    );
 }

@@ -25,6 +25,7 @@ pub fn calibrate_request_from_proto(
                 bio_csv: c.bio_csv,
                 cw_csv: text(c.cw_csv),
                 cv_csv: text(c.cv_csv),
+                event: text(c.event),
             })
             .collect(),
     })
@@ -46,6 +47,7 @@ pub fn calibrate_request_to_proto(u: &CalibrationUpload) -> pb::CalibrateRequest
                 bio_csv: r.bio_csv.clone(),
                 cw_csv: r.cw_csv.clone().unwrap_or_default(),
                 cv_csv: r.cv_csv.clone().unwrap_or_default(),
+                event: r.event.clone().unwrap_or_default(),
             })
             .collect(),
     }
@@ -73,5 +75,6 @@ pub fn calibration_info_to_proto(info: &CalibrationInfo) -> pb::CalibrationInfo 
         recordings: u32_of(c.summary.recordings),
         fit_ms: c.summary.fit_ms,
         persisted: info.persisted,
+        electrodes_only: c.settings.electrodes_only,
     }
 }

@@ -7,8 +7,9 @@ use graspd_core::tactile::TareConfig;
 use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;
 
-/// One labelled recording: the `_bio.csv` text, its material, and optionally the arm's
-/// `_cw.csv` and `_cv.csv` texts (both, for frame events).
+/// One labelled recording: the `_bio.csv` text (or an electrodes-only CSV: no pdc column),
+/// its material, and optionally the arm's `_cw.csv` and `_cv.csv` texts (both, for frame
+/// events) or one event for every frame.
 #[derive(Debug, Clone, PartialEq, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CalibrationRecordingJson {
@@ -20,6 +21,10 @@ pub struct CalibrationRecordingJson {
     pub cw_csv: Option<String>,
     #[serde(default)]
     pub cv_csv: Option<String>,
+    /// non_contact, contact or slip: the event of every frame, for a recording labelled as a
+    /// whole (instead of cw_csv and cv_csv).
+    #[serde(default)]
+    pub event: Option<String>,
 }
 
 /// The body of `POST /v1/tactile/calibrations` (the proto's CalibrateRequest).
@@ -55,6 +60,7 @@ impl From<CalibrateJson> for CalibrationUpload {
                     bio_csv: r.bio_csv,
                     cw_csv: r.cw_csv,
                     cv_csv: r.cv_csv,
+                    event: r.event,
                 })
                 .collect(),
         }
@@ -92,6 +98,8 @@ pub struct CalibrationJson {
     pub fit_ms: f64,
     /// Stored in the calibrations directory (else in memory until the server stops).
     pub persisted: bool,
+    /// Fitted on electrodes-only recordings: sessions use it on electrodes_only fingers.
+    pub electrodes_only: bool,
 }
 
 impl From<&CalibrationInfo> for CalibrationJson {
@@ -121,6 +129,7 @@ impl From<&CalibrationInfo> for CalibrationJson {
             recordings: c.summary.recordings,
             fit_ms: c.summary.fit_ms,
             persisted: info.persisted,
+            electrodes_only: c.settings.electrodes_only,
         }
     }
 }

@@ -3,8 +3,9 @@
 use graspd_core::tactile::{Calibration, TareConfig};
 use std::sync::Arc;
 
-/// One labelled recording as the transports receive it: the `_bio.csv` text and, for frame
-/// events, the arm's `_cw.csv` and `_cv.csv` (`tactile::recording` derives them).
+/// One labelled recording as the transports receive it: the `_bio.csv` text (or an
+/// electrodes-only CSV, `tactile::recording`) and, for frame events, the arm's `_cw.csv` and
+/// `_cv.csv` (`tactile::recording` derives them) or one event for the whole recording.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RecordingUpload {
     /// The material touched (`paper`, `foam`, `plastic`, `metal`, optionally `/kind`).
@@ -12,6 +13,9 @@ pub struct RecordingUpload {
     pub bio_csv: String,
     pub cw_csv: Option<String>,
     pub cv_csv: Option<String>,
+    /// The contact event of every frame (`non_contact`, `contact` or `slip`), for a recording
+    /// labelled as a whole (a held touch, a slide) instead of by the arm's files.
+    pub event: Option<String>,
 }
 
 /// A calibration request in domain terms.

@@ -1,11 +1,14 @@
 //! `graspctl tactile …`: fit a calibration on a folder of labelled recordings, list and delete
 //! calibrations (issue 16).
 //!
-//! A folder of recordings: every `*_bio.csv` under DIR (two levels deep at most), with the arm's
-//! `*_cw.csv` and `*_cv.csv` beside it when present (frame events). A recording's material is
-//! given by its folder (relative to DIR): a `labels.csv` in DIR (or `--labels FILE`) maps
-//! folders to materials, one `folder,material` per line (`mat5,plastic/mat5`); without one the
-//! folder's own path is the material (`DIR/foam/…`, `DIR/plastic/eva/…`).
+//! A folder of recordings: every `*_bio.csv` under DIR (two levels deep at most; with
+//! `--all-csv` every `*.csv` but the arm's files and `labels.csv`, for a sensor whose files are
+//! named otherwise — an electrodes-only CSV is told by its columns, `tactile::recording`), with
+//! the arm's `*_cw.csv` and `*_cv.csv` beside it when present (frame events). A recording's
+//! labels are given by its folder (relative to DIR): a `labels.csv` in DIR (or `--labels FILE`)
+//! maps folders to labels, one `folder,material[,event]` per line (`mat5,plastic/mat5`; a held
+//! touch `t,,contact`, a slide `n,,slip`: the event of every frame of the folder's recordings);
+//! without one the folder's own path is the material (`DIR/foam/…`, `DIR/plastic/eva/…`).
 
 use crate::{CliError, connect_tactile};
 use clap::{Args, Subcommand};
@@ -59,10 +62,21 @@ pub struct CalibrateArgs {
     /// Leave the arm's files out (no frame events).
     #[arg(long)]
     no_events: bool,
+    /// Every *.csv under DIR is a recording (not only *_bio.csv).
+    #[arg(long)]
+    all_csv: bool,
 }
 
-/// The `*_bio.csv` files under `dir`, at most two folders deep, sorted.
-fn bio_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+/// A folder's labels: its material and the event of every frame, either optional.
+#[derive(Debug, Clone, Default, PartialEq)]
+struct FolderLabels {
+    material: Option<String>,
+    event: Option<String>,
+}
+
+/// The recordings under `dir`, at most two folders deep, sorted: `*_bio.csv`, or with `all_csv`
+/// every `*.csv` but `*_cw.csv`, `*_cv.csv` and `labels.csv`.
+fn bio_files(dir: &Path, all_csv: bool) -> std::io::Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     let mut stack = vec![(dir.to_path_buf(), 0)];
     while let Some((d, depth)) = stack.pop() {
@@ -70,11 +84,14 @@ fn bio_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
             let path = entry?.path();
             if path.is_dir() && depth < 2 {
                 stack.push((path, depth + 1));
-            } else if path
-                .file_name()
-                .and_then(|n| n.to_str())
-                .is_some_and(|n| n.ends_with("_bio.csv"))
-            {
+            } else if path.file_name().and_then(|n| n.to_str()).is_some_and(|n| {
+                n.ends_with("_bio.csv")
+                    || (all_csv
+                        && n.ends_with(".csv")
+                        && !n.ends_with("_cw.csv")
+                        && !n.ends_with("_cv.csv")
+                        && n != "labels.csv")
+            }) {
                 out.push(path);
             }
         }
@@ -90,19 +107,36 @@ fn read(path: &Path) -> Result<String, CliError> {
     })
 }
 
-/// folder → material from a labels file.
-fn labels(path: &Path) -> Result<BTreeMap<String, String>, CliError> {
+/// folder → labels from a labels file (`folder,material[,event]`, either label may be empty).
+fn labels(path: &Path) -> Result<BTreeMap<String, FolderLabels>, CliError> {
     let mut map = BTreeMap::new();
     for (i, line) in read(path)?.lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
-        let (folder, material) = line.split_once(',').ok_or_else(|| CliError::File {
-            path: path.to_path_buf(),
-            error: FieldError::new(format!("line {}", i + 1), "expected folder,material"),
-        })?;
-        map.insert(folder.trim().to_string(), material.trim().to_string());
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let (folder, material, event) = match fields[..] {
+            [f, m] => (f, m, ""),
+            [f, m, e] => (f, m, e),
+            _ => {
+                return Err(CliError::File {
+                    path: path.to_path_buf(),
+                    error: FieldError::new(
+                        format!("line {}", i + 1),
+                        "expected folder,material or folder,material,event",
+                    ),
+                });
+            }
+        };
+        let text = |s: &str| (!s.is_empty()).then(|| s.to_string());
+        map.insert(
+            folder.to_string(),
+            FolderLabels {
+                material: text(material),
+                event: text(event),
+            },
+        );
     }
     Ok(map)
 }
@@ -115,7 +149,7 @@ impl CalibrateArgs {
             .clone()
             .or_else(|| Some(self.dir.join("labels.csv")).filter(|p| p.is_file()));
         let labels = labels_file.as_deref().map(labels).transpose()?;
-        let files = bio_files(&self.dir).map_err(|source| CliError::Read {
+        let files = bio_files(&self.dir, self.all_csv).map_err(|source| CliError::Read {
             path: self.dir.clone(),
             source,
         })?;
@@ -126,16 +160,21 @@ impl CalibrateArgs {
                 .and_then(|p| p.strip_prefix(&self.dir).ok())
                 .map(|p| p.to_string_lossy().replace('\\', "/"))
                 .unwrap_or_default();
-            let material = match &labels {
-                Some(l) => l.get(&folder).cloned(),
-                None => (!folder.is_empty()).then(|| folder.clone()),
+            let FolderLabels { material, event } = match &labels {
+                Some(l) => l.get(&folder).cloned().unwrap_or_default(),
+                None => FolderLabels {
+                    material: (!folder.is_empty()).then(|| folder.clone()),
+                    event: None,
+                },
             };
             let sibling = |kind: &str| {
                 let name = bio.file_name()?.to_str()?.replace("_bio.csv", kind);
                 Some(bio.with_file_name(name)).filter(|p| p.is_file())
             };
             let (cw, cv) = match (sibling("_cw.csv"), sibling("_cv.csv")) {
-                (Some(cw), Some(cv)) if !self.no_events => (Some(read(&cw)?), Some(read(&cv)?)),
+                (Some(cw), Some(cv)) if !self.no_events && event.is_none() => {
+                    (Some(read(&cw)?), Some(read(&cv)?))
+                }
                 _ => (None, None),
             };
             recordings.push(RecordingUpload {
@@ -143,6 +182,7 @@ impl CalibrateArgs {
                 bio_csv: read(&bio)?,
                 cw_csv: cw,
                 cv_csv: cv,
+                event,
             });
         }
         let tare = if self.pretared {
@@ -181,9 +221,14 @@ fn summary(c: &pb::CalibrationInfo) -> String {
         _ => "none".into(),
     };
     format!(
-        "{}: {} electrodes, windows of {} every {}, {} recordings fitted in {:.0} ms{}\n  material windows: {}\n  event windows: {events}\n",
+        "{}: {} electrodes{}, windows of {} every {}, {} recordings fitted in {:.0} ms{}\n  material windows: {}\n  event windows: {events}\n",
         c.name,
         c.electrodes,
+        if c.electrodes_only {
+            " (electrodes only)"
+        } else {
+            ""
+        },
         c.window_length,
         c.stride,
         c.recordings,
@@ -210,7 +255,14 @@ pub async fn run(
             if upload.recordings.is_empty() {
                 return Err(CliError::File {
                     path: args.dir.clone(),
-                    error: FieldError::new("DIR", "no *_bio.csv recordings under it"),
+                    error: FieldError::new(
+                        "DIR",
+                        if args.all_csv {
+                            "no *.csv recordings under it"
+                        } else {
+                            "no *_bio.csv recordings under it (--all-csv takes every *.csv)"
+                        },
+                    ),
                 });
             }
             vec![
@@ -282,5 +334,6 @@ fn calibration_json(c: &pb::CalibrationInfo) -> Result<CalibrationJson, CliError
         recordings: c.recordings as usize,
         fit_ms: c.fit_ms,
         persisted: c.persisted,
+        electrodes_only: c.electrodes_only,
     })
 }

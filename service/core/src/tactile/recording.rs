@@ -6,6 +6,12 @@
 //! * `_bio.csv`: header `timestamp,tdc,tac,pdc,pac1..pac22,ele1..ele19`; every data row ends with
 //!   a trailing comma (one empty field more than the header), which is ignored. Columns are found
 //!   by name, so other electrode counts (`ele1..eleN`) and pac counts work too.
+//! * An electrodes-only file (a sensor that gives only its electrodes, such as the BioTac SP
+//!   recordings of yayaneath/BioTacSP-DoS, header `ff_e1..ff_e24`): a file without a `pdc`
+//!   column. Its electrodes are the `ele1..eleN` columns when there are any, else every column
+//!   but `timestamp`, in file order; pdc, tdc and tac read 0 and there is no pac. Without a
+//!   `timestamp` column the rows are taken 10 ms apart (100 Hz) and cannot be aligned with the
+//!   arm's files.
 //! * `_cw.csv` `timestamp,fx,fy,fz,tx,ty,tz` and `_cv.csv` `timestamp,x,y,z,a,b,c` run at about
 //!   150 Hz on their own clocks (`-nan` allowed); they are linearly interpolated onto the BioTac
 //!   time stamps (held constant outside their time range).
@@ -123,10 +129,31 @@ fn numbered(names: &[String], prefix: &str) -> Vec<usize> {
     out
 }
 
+/// A parsed `_bio.csv` file: its rows and how it was laid out (module doc).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BioFile {
+    pub rows: Vec<BioRow>,
+    /// Only electrode columns (no `pdc`): pdc, tdc and tac are 0 and there is no pac.
+    pub electrodes_only: bool,
+    /// The file had a `timestamp` column (else the rows are 10 ms apart).
+    pub timestamped: bool,
+}
+
+/// Row spacing assumed for a file without time stamps, s (100 Hz, a BioTac's frame rate).
+pub const UNTIMED_ROW_S: f64 = 0.01;
+
 /// Parses a `_bio.csv` file (module doc).
 pub fn parse_bio_csv(text: &str) -> Result<Vec<BioRow>, FieldError> {
+    parse_bio_file(text).map(|f| f.rows)
+}
+
+/// Parses a `_bio.csv` file of either layout (module doc).
+pub fn parse_bio_file(text: &str) -> Result<BioFile, FieldError> {
     const WHAT: &str = "bio_csv";
     let (names, rows) = parse_numeric_csv(text, WHAT)?;
+    if !names.iter().any(|n| n.eq_ignore_ascii_case("pdc")) {
+        return electrodes_only_file(&names, rows);
+    }
     let ts = column(&names, "timestamp", WHAT)?;
     let (tdc, tac, pdc) = (
         column(&names, "tdc", WHAT)?,
@@ -141,7 +168,7 @@ pub fn parse_bio_csv(text: &str) -> Result<Vec<BioRow>, FieldError> {
     if ele.is_empty() {
         return Err(FieldError::new(WHAT, "no electrode columns ele1..eleN"));
     }
-    Ok(rows
+    let rows = rows
         .into_iter()
         .map(|r| BioRow {
             timestamp: r[ts],
@@ -151,7 +178,46 @@ pub fn parse_bio_csv(text: &str) -> Result<Vec<BioRow>, FieldError> {
             pac: pac.iter().map(|&i| r[i]).collect(),
             electrodes: ele.iter().map(|&i| r[i]).collect(),
         })
-        .collect())
+        .collect();
+    Ok(BioFile {
+        rows,
+        electrodes_only: false,
+        timestamped: true,
+    })
+}
+
+/// An electrodes-only file (module doc).
+fn electrodes_only_file(names: &[String], rows: Vec<Vec<f64>>) -> Result<BioFile, FieldError> {
+    let ts = names
+        .iter()
+        .position(|n| n.eq_ignore_ascii_case("timestamp"));
+    let mut ele = numbered(names, "ele");
+    if ele.is_empty() {
+        ele = (0..names.len()).filter(|&i| Some(i) != ts).collect();
+    }
+    if ele.is_empty() {
+        return Err(FieldError::new(
+            "bio_csv",
+            "no electrode columns (ele1..eleN, or any column but timestamp)",
+        ));
+    }
+    let rows = rows
+        .into_iter()
+        .enumerate()
+        .map(|(k, r)| BioRow {
+            timestamp: ts.map_or(k as f64 * UNTIMED_ROW_S, |t| r[t]),
+            tdc: 0.0,
+            tac: 0.0,
+            pdc: 0.0,
+            pac: Vec::new(),
+            electrodes: ele.iter().map(|&i| r[i]).collect(),
+        })
+        .collect();
+    Ok(BioFile {
+        rows,
+        electrodes_only: true,
+        timestamped: ts.is_some(),
+    })
 }
 
 /// Parses a `_cw.csv` / `_cv.csv` file and picks the named columns.
@@ -220,6 +286,8 @@ impl Default for LabelThresholds {
 pub struct Recording {
     pub rows: Vec<BioRow>,
     pub labels: Option<Vec<ContactEvent>>,
+    /// The file gave only electrodes ([`BioFile::electrodes_only`]).
+    pub electrodes_only: bool,
 }
 
 impl Recording {
@@ -234,11 +302,21 @@ impl Recording {
         cv: Option<&str>,
         th: LabelThresholds,
     ) -> Result<Self, FieldError> {
-        let rows = parse_bio_csv(bio)?;
+        let BioFile {
+            rows,
+            electrodes_only,
+            timestamped,
+        } = parse_bio_file(bio)?;
         if rows.is_empty() {
             return Err(FieldError::new("bio_csv", "no data rows"));
         }
         let labels = match (cw, cv) {
+            (Some(_), Some(_)) if !timestamped => {
+                return Err(FieldError::new(
+                    "cw_csv",
+                    "the bio_csv has no timestamp column to align the arm's files with",
+                ));
+            }
             (Some(cw), Some(cv)) => {
                 let w = parse_series_csv(cw, "cw_csv", &["fz"])?;
                 let v = parse_series_csv(cv, "cv_csv", &["x", "y"])?;
@@ -262,7 +340,11 @@ impl Recording {
             }
             _ => None,
         };
-        Ok(Self { rows, labels })
+        Ok(Self {
+            rows,
+            labels,
+            electrodes_only,
+        })
     }
 
     /// The rows as single-finger frames.
@@ -297,6 +379,35 @@ mod tests {
         assert!(e.message.contains("line 2"), "{e}");
         let e = parse_bio_csv("timestamp,tdc,tac,pdc,pac,ele1\n1,2,3,x,5,6\n").unwrap_err();
         assert!(e.message.contains("column pdc"), "{e}");
+    }
+
+    /// A file without pdc is electrodes only: `ele` columns when named so, else every column
+    /// but the time stamp; without time stamps the rows are 10 ms apart and cannot take the
+    /// arm's files.
+    #[test]
+    fn an_electrodes_only_file_reads_its_electrodes() {
+        let f = parse_bio_file("ff_e1,ff_e2,ff_e3\n3000,2900,2800\n2990,2890,2810\n").unwrap();
+        assert!(f.electrodes_only && !f.timestamped);
+        assert_eq!(f.rows[1].electrodes, vec![2990.0, 2890.0, 2810.0]);
+        assert_eq!((f.rows[0].timestamp, f.rows[1].timestamp), (0.0, 0.01));
+        assert!(f.rows[1].pac.is_empty() && f.rows[1].pdc == 0.0);
+        let f = parse_bio_file("timestamp,ele1,ele2,note\n5.5,1,2,9\n").unwrap();
+        assert!(f.electrodes_only && f.timestamped);
+        assert_eq!(
+            (f.rows[0].timestamp, &f.rows[0].electrodes[..]),
+            (5.5, &[1.0, 2.0][..])
+        );
+        let cw = "timestamp,fx,fy,fz,tx,ty,tz\n0,0,0,3,0,0,0\n";
+        let cv = "timestamp,x,y,z,a,b,c\n0,0,0,0,0,0,0\n";
+        let e = Recording::from_csv("e1,e2\n1,2\n", Some(cw), Some(cv)).unwrap_err();
+        assert_eq!(e.field, "cw_csv");
+        let e = parse_bio_file("timestamp\n1\n").unwrap_err();
+        assert!(e.message.contains("no electrode columns"), "{e}");
+        assert!(
+            !Recording::from_csv(BIO, None, None)
+                .unwrap()
+                .electrodes_only
+        );
     }
 
     #[test]

@@ -8,7 +8,8 @@ use crate::hand_store::check_name;
 pub use graspd_api::request::{CalibrationInfo, CalibrationUpload, RecordingUpload};
 use graspd_core::FieldError;
 use graspd_core::tactile::{
-    Calibration, CalibrationRecording, CalibrationSettings, Recording, StabilizerConfig,
+    Calibration, CalibrationRecording, CalibrationSettings, ContactEvent, Recording,
+    StabilizerConfig,
 };
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -72,17 +73,41 @@ impl GraspService {
             Ok(())
         };
         taken(&self.calibrations())?;
-        let recordings = upload
+        let parsed = upload
             .recordings
             .iter()
             .enumerate()
             .map(|(i, r)| parse_recording(r, &format!("recordings[{i}]")))
             .collect::<Result<Vec<_>, FieldError>>()?;
+        // One sensor: every recording with the first one's layout.
+        let electrodes_only = parsed.first().is_some_and(|(_, e)| *e);
+        if let Some(i) = parsed.iter().position(|(_, e)| *e != electrodes_only) {
+            let (this, first) = if electrodes_only {
+                (
+                    "has pdc, pac and the thermal channels",
+                    "gives electrodes only",
+                )
+            } else {
+                (
+                    "gives electrodes only",
+                    "has pdc, pac and the thermal channels",
+                )
+            };
+            return Err(FieldError::new(
+                format!("recordings[{i}].bio_csv"),
+                format!(
+                    "the recording {this}; recordings[0] {first}: one calibration is of one sensor"
+                ),
+            )
+            .into());
+        }
+        let recordings: Vec<CalibrationRecording> = parsed.into_iter().map(|(r, _)| r).collect();
         let d = CalibrationSettings::default();
         let settings = CalibrationSettings {
             window_length: upload.window_length.unwrap_or(d.window_length),
             stride: upload.stride.unwrap_or(d.stride),
             tare: upload.tare,
+            electrodes_only,
         };
         let calibration = guarded("fitting the calibration", || {
             Calibration::fit(&upload.name, &recordings, settings).map_err(ServiceError::from)
@@ -168,13 +193,16 @@ impl GraspService {
             .into());
         }
         for (i, f) in config.fingers.iter().enumerate() {
-            if f.electrodes_only {
+            if f.electrodes_only != s.electrodes_only {
+                let reads = if s.electrodes_only {
+                    "was fitted on electrodes only; the finger must be electrodes_only"
+                } else {
+                    "reads pdc, pac and the thermal channels; an electrodes-only finger needs \
+                     an electrodes-only calibration or model_free"
+                };
                 return Err(FieldError::new(
                     format!("session.fingers[{i}].electrodes_only"),
-                    format!(
-                        "calibration '{name}' reads pdc, pac and the thermal channels; an \
-                         electrodes-only finger needs model_free"
-                    ),
+                    format!("calibration '{name}' {reads}"),
                 )
                 .into());
             }
@@ -236,20 +264,51 @@ fn unknown(c: &Calibrations, name: &str, field: &str) -> FieldError {
     )
 }
 
-/// One upload as core's recording: the CSVs parsed (errors renamed under `field`), events
-/// when both arm files are given.
-fn parse_recording(r: &RecordingUpload, field: &str) -> Result<CalibrationRecording, FieldError> {
+/// One upload as core's recording (errors renamed under `field`): the CSVs parsed, events
+/// when both arm files are given or the whole recording's event; and whether it gave
+/// electrodes only.
+fn parse_recording(
+    r: &RecordingUpload,
+    field: &str,
+) -> Result<(CalibrationRecording, bool), FieldError> {
     if r.cw_csv.is_some() != r.cv_csv.is_some() {
         return Err(FieldError::new(
             format!("{field}.cw_csv"),
             "frame events need both the wrench (cw_csv) and the velocity (cv_csv) files",
         ));
     }
+    let event = match r.event.as_deref() {
+        None => None,
+        Some(_) if r.cw_csv.is_some() => {
+            return Err(FieldError::new(
+                format!("{field}.event"),
+                "give the recording's event or the arm's files (cw_csv, cv_csv), not both",
+            ));
+        }
+        Some(name) => Some(
+            ContactEvent::ALL
+                .into_iter()
+                .find(|e| e.name() == name.trim())
+                .ok_or_else(|| {
+                    FieldError::new(
+                        format!("{field}.event"),
+                        format!(
+                            "unknown event '{}': one of non_contact, contact, slip",
+                            name.escape_debug()
+                        ),
+                    )
+                })?,
+        ),
+    };
     let rec = Recording::from_csv(&r.bio_csv, r.cw_csv.as_deref(), r.cv_csv.as_deref())
         .map_err(|e| FieldError::new(format!("{field}.{}", e.field), e.message))?;
-    Ok(CalibrationRecording {
-        material: r.material.clone(),
-        readings: rec.rows.iter().map(|row| row.reading()).collect(),
-        events: rec.labels,
-    })
+    let events = event.map(|e| vec![e; rec.rows.len()]).or(rec.labels);
+    Ok((
+        CalibrationRecording {
+            material: r.material.clone(),
+            readings: rec.rows.iter().map(|row| row.reading()).collect(),
+            events,
+        },
+        rec.electrodes_only,
+    ))
 }

@@ -5,6 +5,11 @@
 //! the electrode pattern (how the skin deforms). On the real BioTac slides (split by recording,
 //! `tests/tactile_calibration.rs`) the spectrum is the strongest single group; the electrodes
 //! come next; every group adds.
+//!
+//! A sensor that gives only its electrodes (a BioTac SP) has its own set
+//! ([`Features::electrodes_only`]): the electrodes' means and pattern as above, and how the
+//! pattern changed over the window — each electrode's change from the first sample to the
+//! last, and the log of that change's size, which a slide makes larger than a held touch.
 
 use super::super::detector::DetectorSample;
 use rustfft::num_complex::Complex;
@@ -37,11 +42,23 @@ pub fn feature_count(electrodes: usize) -> usize {
     BANDS.len() + SCALARS + 2 * electrodes
 }
 
+/// The number of features of an electrodes-only window of `window_length` samples: the
+/// change over the window only when it has two or more.
+pub fn electrode_feature_count(electrodes: usize, window_length: usize) -> usize {
+    if window_length > 1 {
+        3 * electrodes + 1
+    } else {
+        2 * electrodes
+    }
+}
+
 /// Computes [`Features::of`] windows; holds the FFT plan (build once per detector).
 #[derive(Clone)]
 pub struct Features {
     fft: Arc<dyn Fft<f64>>,
     hann: Vec<f64>,
+    /// The sensor gives only its electrodes ([`Features::electrodes_only`]).
+    electrodes_only: bool,
 }
 
 impl std::fmt::Debug for Features {
@@ -57,11 +74,29 @@ impl Default for Features {
             hann: (0..BLOCK)
                 .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / (BLOCK - 1) as f64).cos())
                 .collect(),
+            electrodes_only: false,
         }
     }
 }
 
 impl Features {
+    /// The features of a sensor that gives only its electrodes (module doc).
+    pub fn electrodes_only() -> Self {
+        Self {
+            electrodes_only: true,
+            ..Self::default()
+        }
+    }
+
+    /// The features of a sensor as its calibration reads it.
+    pub fn for_sensor(electrodes_only: bool) -> Self {
+        if electrodes_only {
+            Self::electrodes_only()
+        } else {
+            Self::default()
+        }
+    }
+
     /// The features of one window (oldest sample first, every one with the same electrode
     /// count): ln(1 + mean energy) in each half-octave band of the first-differenced pac signal
     /// (every sample's pac samples in one sequence; the difference keeps the AC-coupled
@@ -69,6 +104,9 @@ impl Features {
     /// last, mean pdc, ln(1 + the pac samples' standard deviation); each electrode's mean, and
     /// the same as a pattern — each over 1 + their sum — which the touch's pressure scales less.
     pub fn of(&self, window: &[DetectorSample]) -> Vec<f64> {
+        if self.electrodes_only {
+            return electrode_features(window);
+        }
         let n = window.len().max(1) as f64;
         let mean = |f: &dyn Fn(&DetectorSample) -> f64| window.iter().map(f).sum::<f64>() / n;
         let pac: Vec<f64> = window
@@ -91,13 +129,7 @@ impl Features {
         let m = pac.iter().sum::<f64>() / pac.len().max(1) as f64;
         let var = pac.iter().map(|v| (v - m).powi(2)).sum::<f64>() / pac.len().max(1) as f64;
         f.push(var.sqrt().ln_1p());
-        let electrodes = window.first().map_or(0, |s| s.electrodes.len());
-        let means: Vec<f64> = (0..electrodes)
-            .map(|e| mean(&|s| s.electrodes.get(e).copied().unwrap_or(0.0)))
-            .collect();
-        let total = 1.0 + means.iter().sum::<f64>();
-        f.extend(&means);
-        f.extend(means.iter().map(|v| v / total));
+        f.extend(electrode_pattern(window));
         f
     }
 
@@ -120,6 +152,46 @@ impl Features {
         }
         energy.iter().map(|e| (e / blocks as f64).ln_1p()).collect()
     }
+}
+
+/// Each electrode's mean over the window, and the same as a pattern — each over 1 + their sum
+/// — which the touch's pressure scales less.
+fn electrode_pattern(window: &[DetectorSample]) -> Vec<f64> {
+    let n = window.len().max(1) as f64;
+    let electrodes = window.first().map_or(0, |s| s.electrodes.len());
+    let means: Vec<f64> = (0..electrodes)
+        .map(|e| {
+            window
+                .iter()
+                .map(|s| s.electrodes.get(e).copied().unwrap_or(0.0))
+                .sum::<f64>()
+                / n
+        })
+        .collect();
+    let total = 1.0 + means.iter().sum::<f64>();
+    let pattern: Vec<f64> = means.iter().map(|v| v / total).collect();
+    [means, pattern].concat()
+}
+
+/// An electrodes-only window's features ([`electrode_feature_count`]): the pattern of
+/// [`electrode_pattern`], then — for a window of two or more samples — each electrode's change
+/// from the first sample to the last and ln(1 + that change's norm).
+fn electrode_features(window: &[DetectorSample]) -> Vec<f64> {
+    let mut f = electrode_pattern(window);
+    if let (Some(a), Some(b)) = (window.first(), window.last())
+        && window.len() > 1
+    {
+        let change: Vec<f64> = b
+            .electrodes
+            .iter()
+            .zip(&a.electrodes)
+            .map(|(y, x)| y - x)
+            .collect();
+        let size = change.iter().map(|c| c * c).sum::<f64>().sqrt();
+        f.extend(change);
+        f.push(size.ln_1p());
+    }
+    f
 }
 
 #[cfg(test)]
@@ -175,5 +247,24 @@ mod tests {
             "{amplitude}"
         );
         assert_eq!(&x[BANDS.len() + 6..], &[1.0, 3.0, 0.2, 0.6]);
+    }
+
+    /// Electrodes only, by hand: the means, the pattern, the change and its size.
+    #[test]
+    fn electrodes_only_features_are_the_pattern_and_its_change() {
+        let at = |e: [f64; 2]| DetectorSample {
+            electrodes: e.to_vec(),
+            ..sample(Vec::new(), 0.0)
+        };
+        let window = [at([1.0, 5.0]), at([2.0, 4.0]), at([3.0, 3.0])];
+        let x = Features::electrodes_only().of(&window);
+        assert_eq!(x.len(), electrode_feature_count(2, 3));
+        // Means 2 and 4 (sum 6, pattern over 7); change 3 − 1 = 2 and 3 − 5 = −2, norm √8.
+        assert_eq!(&x[..6], &[2.0, 4.0, 2.0 / 7.0, 4.0 / 7.0, 2.0, -2.0]);
+        assert!((x[6] - 8f64.sqrt().ln_1p()).abs() < 1e-12);
+        // One sample: no change.
+        let x = Features::electrodes_only().of(&window[..1]);
+        assert_eq!(x, vec![1.0, 5.0, 1.0 / 7.0, 5.0 / 7.0]);
+        assert_eq!(x.len(), electrode_feature_count(2, 1));
     }
 }

@@ -43,6 +43,11 @@ pub struct CalibrationSettings {
     pub stride: usize,
     /// The fingers' taring (a session using the calibration must tare alike).
     pub tare: TareConfig,
+    /// The sensor gives only its electrodes (its fingers are `electrodes_only` in a session):
+    /// no pac, pdc or thermal channel is read, and the features are the electrodes' own
+    /// ([`features::Features::electrodes_only`]).
+    #[serde(default)]
+    pub electrodes_only: bool,
 }
 
 impl Default for CalibrationSettings {
@@ -52,6 +57,7 @@ impl Default for CalibrationSettings {
             window_length: 32,
             stride: 3,
             tare: TareConfig::default(),
+            electrodes_only: false,
         }
     }
 }
@@ -116,13 +122,19 @@ impl Calibration {
             ));
         }
         for (i, rec) in recordings.iter().enumerate() {
-            validate_recording(rec, electrodes, &format!("recordings[{i}]"))?;
+            validate_recording(
+                rec,
+                electrodes,
+                settings.electrodes_only,
+                &format!("recordings[{i}]"),
+            )?;
         }
-        let features = Features::default();
+        let features = Features::for_sensor(settings.electrodes_only);
         let mut material_examples: Vec<(String, Vec<f64>)> = Vec::new();
         let mut event_examples: Vec<(String, Vec<f64>)> = Vec::new();
         for rec in recordings {
-            let mut source = SampleSource::new(settings.tare, electrodes);
+            let mut source = SampleSource::new(settings.tare, electrodes)
+                .electrodes_only(settings.electrodes_only);
             let mut sampler: WindowSampler<DetectorSample> =
                 WindowSampler::new(settings.window_length, settings.stride);
             for (j, reading) in rec.readings.iter().enumerate() {
@@ -200,10 +212,12 @@ impl Calibration {
     }
 }
 
-/// The checks of [`Calibration::fit`] on one recording.
+/// The checks of [`Calibration::fit`] on one recording (of a sensor with pac, pdc and the
+/// thermal channels unless `electrodes_only`, whose other channels are not read).
 fn validate_recording(
     rec: &CalibrationRecording,
     electrodes: usize,
+    electrodes_only: bool,
     field: &str,
 ) -> Result<(), FieldError> {
     if rec.readings.is_empty() {
@@ -220,8 +234,18 @@ fn validate_recording(
                 ),
             ));
         }
+        if electrodes_only {
+            if r.electrodes.iter().any(|v| !v.is_finite()) {
+                return Err(FieldError::new(at, "a value is not finite"));
+            }
+            continue;
+        }
         if r.pac.is_empty() {
-            return Err(FieldError::new(format!("{at}.pac"), "no pac sample"));
+            return Err(FieldError::new(
+                format!("{at}.pac"),
+                "no pac sample (a sensor that gives only its electrodes is calibrated \
+                 electrodes_only)",
+            ));
         }
         let values = [r.pdc, r.tdc, r.tac]
             .into_iter()
@@ -270,8 +294,8 @@ pub struct CalibratedDetector {
 impl CalibratedDetector {
     pub fn new(calibration: Arc<Calibration>, fallback: ModelFreeThresholds) -> Self {
         Self {
+            features: Features::for_sensor(calibration.settings.electrodes_only),
             calibration,
-            features: Features::default(),
             fallback: ModelFreeDetector::new(fallback),
         }
     }
@@ -432,6 +456,111 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// An electrodes-only finger (4 electrodes in a row, pretared): a held touch presses
+    /// them in a fixed pattern; a slide moves the pressed spot along the row and back.
+    fn electrodes_only(slides: bool, frames: usize, seed: u64) -> CalibrationRecording {
+        let mut x = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+        let mut noise = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x % 1000) as f64 / 1000.0 - 0.5
+        };
+        let readings = (0..frames)
+            .map(|f| {
+                let spot = if slides {
+                    1.5 + 1.5 * (f as f64 * 0.05).sin()
+                } else {
+                    1.0 + 0.2 * seed as f64
+                };
+                FingerReading {
+                    electrodes: (0..4)
+                        .map(|e| 30.0 * (-(e as f64 - spot).powi(2)).exp() + noise())
+                        .collect(),
+                    ..FingerReading::default()
+                }
+            })
+            .collect();
+        let event = if slides {
+            ContactEvent::Slip
+        } else {
+            ContactEvent::Contact
+        };
+        CalibrationRecording {
+            material: None,
+            readings,
+            events: Some(vec![event; frames]),
+        }
+    }
+
+    /// Fitted on held touches and slides of a sensor that gives only its electrodes, a session
+    /// whose finger is electrodes_only names a new slide slip and a new touch contact once its
+    /// window is full; the same recordings do not fit a calibration that reads pac.
+    #[test]
+    fn an_electrodes_only_calibration_tells_a_slide_from_a_touch() {
+        let recs: Vec<CalibrationRecording> = (0..6)
+            .map(|k| electrodes_only(k % 2 == 1, 150, k as u64))
+            .collect();
+        let settings = CalibrationSettings {
+            window_length: 8,
+            stride: 2,
+            electrodes_only: true,
+            ..settings()
+        };
+        let c = Arc::new(Calibration::fit("sp", &recs, settings).unwrap());
+        assert!(c.material.is_none());
+        assert_eq!(c.events.as_ref().unwrap().labels, vec!["contact", "slip"]);
+        // 150 readings, windows of 8 every 2nd: full from reading 14 on, 68 per recording.
+        assert_eq!(c.summary.event_windows, [0, 3 * 68, 3 * 68]);
+        let layout = SensorLayout::from_spec(LayoutSpec {
+            name: "row".into(),
+            description: String::new(),
+            electrodes: vec![[0.0, 0.0], [4.0, 0.0], [8.0, 0.0], [12.0, 0.0]],
+        })
+        .unwrap();
+        for (slides, want) in [(true, ContactEvent::Slip), (false, ContactEvent::Contact)] {
+            let mut config = StabilizerConfig {
+                fingers: vec![FingerConfig {
+                    electrodes_only: true,
+                    name: "ff".into(),
+                    layout: layout.clone(),
+                    tare: TareConfig::pretared(),
+                }],
+                ..StabilizerConfig::default()
+            };
+            (config.window_length, config.stride) = (8, 2);
+            let detector: Box<dyn EventDetector> = Box::new(CalibratedDetector::new(
+                c.clone(),
+                ModelFreeThresholds::default(),
+            ));
+            let mut s = Stabilizer::with_detectors(config, vec![detector]).unwrap();
+            let test = electrodes_only(slides, 120, 7);
+            let mut named = 0;
+            for (i, r) in test.readings.into_iter().enumerate() {
+                let out = s
+                    .step(&Frame {
+                        timestamp: i as f64 * 0.01,
+                        fingers: vec![r],
+                    })
+                    .unwrap();
+                if i >= 20 {
+                    named += usize::from(out.fingers[0].event == want);
+                }
+            }
+            assert!(named >= 95, "{want:?}: {named} of 100 frames");
+        }
+        let e = Calibration::fit(
+            "sp",
+            &recs,
+            CalibrationSettings {
+                electrodes_only: false,
+                ..settings
+            },
+        )
+        .unwrap_err();
+        assert_eq!(e.field, "recordings[0].readings[0].pac");
     }
 
     #[test]
