@@ -341,7 +341,8 @@ fn tactile_calibrate_then_stabilize_with_the_calibration() {
 
 /// `graspctl tactile calibrate --all-csv` on a copy of BioTac SP direction-of-slip sequences
 /// (electrodes only, files not named `*_bio.csv`) labelled by folder with an event
-/// (`t,,contact`, `n,,slip`): the calibration is electrodes only and counts both events.
+/// (`t,,contact`, `n,,slip,north`, `s,,slip,south`): the calibration is electrodes only and
+/// counts both events and the directions.
 #[test]
 fn tactile_calibrate_an_electrodes_only_sensor_by_event() {
     let server = Server::start();
@@ -349,7 +350,7 @@ fn tactile_calibrate_an_electrodes_only_sensor_by_event() {
     let dir = std::env::temp_dir().join(format!("graspd-e2e-calibrate-sp-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let mut copied = 0;
-    for label in ["t", "n"] {
+    for label in ["t", "n", "s"] {
         std::fs::create_dir_all(dir.join(label)).unwrap();
         let mut files: Vec<_> = std::fs::read_dir(dos.join(label))
             .unwrap()
@@ -362,7 +363,11 @@ fn tactile_calibrate_an_electrodes_only_sensor_by_event() {
             copied += 1;
         }
     }
-    std::fs::write(dir.join("labels.csv"), "t,,contact\nn,,slip\n").unwrap();
+    std::fs::write(
+        dir.join("labels.csv"),
+        "t,,contact\nn,,slip,north\ns,,slip,south\n",
+    )
+    .unwrap();
     let calibrate = |extra: &[&str]| {
         let mut args = vec![
             "tactile",
@@ -396,6 +401,10 @@ fn tactile_calibrate_an_electrodes_only_sensor_by_event() {
     assert!(summary.contains("material windows: none"), "{summary}");
     assert!(
         summary.contains("non-contact 0, contact ") && !summary.contains("slip 0\n"),
+        "{summary}"
+    );
+    assert!(
+        summary.contains("slip direction windows: north ") && summary.contains(", south "),
         "{summary}"
     );
     let _ = std::fs::remove_dir_all(&dir);

@@ -34,6 +34,7 @@ fn upload(name: &str) -> CalibrationUpload {
                 cw_csv: Some(read(mat, sample, "cw")),
                 cv_csv: Some(read(mat, sample, "cv")),
                 event: None,
+                slip_direction: None,
             });
         }
     }
@@ -222,6 +223,11 @@ async fn bad_calibrations_and_sessions_that_do_not_fit_are_refused_naming_the_fi
             "unknown event 'slide'",
         ),
         (
+            json!({"name": "x", "recordings": [rec("foam"), {"material": "metal", "bio_csv": bio, "slip_direction": "up"}]}),
+            "recordings[1].slip_direction",
+            "unknown slip direction 'up'",
+        ),
+        (
             json!({"name": "x", "recordings": [rec("foam"), {"material": "metal", "bio_csv": bio, "event": "slip", "cw_csv": "timestamp,fx,fy,fz,tx,ty,tz\n", "cv_csv": "timestamp,x,y,z,a,b,c\n"}]}),
             "recordings[1].event",
             "not both",
@@ -358,7 +364,8 @@ fn dos(label: &str, object: &str, k: usize) -> String {
 /// A sensor that gives only its electrodes: a calibration fitted over REST on real BioTac SP
 /// held touches (event contact) and slides (event slip) of three objects is electrodes only;
 /// a session of an electrodes_only finger naming it reports slip on a slide of the fourth
-/// object in more of its frames than on a held touch of it.
+/// object in more of its frames than on a held touch of it, and names a direction (the slides
+/// were labelled north, south and clockwise) in every slipping frame.
 #[tokio::test]
 async fn an_electrodes_only_calibration_tells_slides_from_touches() {
     let server = Server::start();
@@ -367,7 +374,11 @@ async fn an_electrodes_only_calibration_tells_slides_from_touches() {
         for k in 0..4 {
             recordings.push(json!({"bio_csv": dos("t", object, k), "event": "contact"}));
             for label in ["n", "s", "cw"] {
-                recordings.push(json!({"bio_csv": dos(label, object, k), "event": "slip"}));
+                recordings.push(json!({
+                    "bio_csv": dos(label, object, k),
+                    "event": "slip",
+                    "slip_direction": label,
+                }));
             }
         }
     }
@@ -385,6 +396,13 @@ async fn an_electrodes_only_calibration_tells_slides_from_touches() {
         "{info}"
     );
     assert_eq!(info["material_windows"], json!([]), "{info}");
+    let directions: Vec<&str> = info["direction_windows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["label"].as_str().unwrap())
+        .collect();
+    assert_eq!(directions, ["clockwise", "north", "south"], "{info}");
     let slip_frames = |csv: String| {
         let server = &server;
         async move {
@@ -411,6 +429,15 @@ async fn an_electrodes_only_calibration_tells_slides_from_touches() {
                 .iter()
                 .filter(|f| f["fingers"][0]["event"] == "slip")
                 .count();
+            // A slipping frame names a direction; no other does.
+            for f in frames {
+                let finger = &f["fingers"][0];
+                assert_eq!(
+                    finger["event"] == "slip",
+                    finger["slip_direction"].is_string(),
+                    "{finger}"
+                );
+            }
             (slip, frames.len())
         }
     };

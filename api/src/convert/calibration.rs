@@ -26,6 +26,7 @@ pub fn calibrate_request_from_proto(
                 cw_csv: text(c.cw_csv),
                 cv_csv: text(c.cv_csv),
                 event: text(c.event),
+                slip_direction: text(c.slip_direction),
             })
             .collect(),
     })
@@ -48,6 +49,7 @@ pub fn calibrate_request_to_proto(u: &CalibrationUpload) -> pb::CalibrateRequest
                 cw_csv: r.cw_csv.clone().unwrap_or_default(),
                 cv_csv: r.cv_csv.clone().unwrap_or_default(),
                 event: r.event.clone().unwrap_or_default(),
+                slip_direction: r.slip_direction.clone().unwrap_or_default(),
             })
             .collect(),
     }
@@ -76,5 +78,14 @@ pub fn calibration_info_to_proto(info: &CalibrationInfo) -> pb::CalibrationInfo 
         fit_ms: c.summary.fit_ms,
         persisted: info.persisted,
         electrodes_only: c.settings.electrodes_only,
+        direction_windows: c
+            .summary
+            .direction_windows
+            .iter()
+            .map(|(label, n)| pb::LabelCount {
+                label: label.clone(),
+                windows: *n as u64,
+            })
+            .collect(),
     }
 }

@@ -5,7 +5,7 @@ use graspd_core::FieldError;
 use graspd_core::tactile::{
     Baseline, ContactEvent, ControlMode, DesiredForceLaw, DetectorChoice, ElectrodePolarity,
     FingerReading, FingerResult, ForceUnit, Frame, FrameResult, LayoutSpec, Material,
-    ModelFreeThresholds, PidGains, StabilizerConfig, TareConfig,
+    ModelFreeThresholds, PidGains, SlipDirection, StabilizerConfig, TareConfig,
 };
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::stabilize_request::Kind;
@@ -298,6 +298,14 @@ pub fn setpoint_to_proto(r: &FrameResult, index: u64) -> pb::StabilizationSetpoi
                     .material_probabilities
                     .map(|p| p.to_vec())
                     .unwrap_or_default(),
+                slip_direction: f.slip_direction.map_or(
+                    pb::SlipDirection::Unspecified as i32,
+                    slip_direction_to_proto,
+                ),
+                slip_direction_probabilities: f
+                    .slip_direction_probabilities
+                    .map(|p| p.to_vec())
+                    .unwrap_or_default(),
                 force: f.force,
                 force_unit: match f.force_unit {
                     ForceUnit::Raw => pb::ForceUnit::Raw,
@@ -391,6 +399,32 @@ pub fn setpoint_from_proto(m: pb::StabilizationSetpoint) -> Result<FrameResult, 
                     })?,
                 )
             };
+            let slip_direction = match pb::SlipDirection::try_from(f.slip_direction) {
+                Ok(pb::SlipDirection::Unspecified) => None,
+                Ok(d) => SlipDirection::ALL
+                    .into_iter()
+                    .find(|&s| slip_direction_to_proto(s) == d as i32),
+                Err(_) => {
+                    return Err(FieldError::new(
+                        field("slip_direction"),
+                        format!("unknown value {}", f.slip_direction),
+                    ));
+                }
+            };
+            let slip_direction_probabilities = if f.slip_direction_probabilities.is_empty() {
+                None
+            } else {
+                Some(
+                    <[f64; 6]>::try_from(f.slip_direction_probabilities).map_err(
+                        |v: Vec<f64>| {
+                            FieldError::new(
+                                field("slip_direction_probabilities"),
+                                format!("{} values, expected 0 or 6", v.len()),
+                            )
+                        },
+                    )?,
+                )
+            };
             Ok(FingerResult {
                 finger: f.finger,
                 tared: f.tared,
@@ -398,6 +432,8 @@ pub fn setpoint_from_proto(m: pb::StabilizationSetpoint) -> Result<FrameResult, 
                 event_probabilities,
                 material,
                 material_probabilities,
+                slip_direction,
+                slip_direction_probabilities,
                 force: f.force,
                 force_unit,
                 contact_location: f.contact_location.map(|l| [l.row, l.col]),
@@ -413,4 +449,16 @@ pub fn setpoint_from_proto(m: pb::StabilizationSetpoint) -> Result<FrameResult, 
         timestamp: m.timestamp,
         fingers,
     })
+}
+
+/// A slip direction as the proto enum's value.
+fn slip_direction_to_proto(d: SlipDirection) -> i32 {
+    (match d {
+        SlipDirection::North => pb::SlipDirection::North,
+        SlipDirection::East => pb::SlipDirection::East,
+        SlipDirection::South => pb::SlipDirection::South,
+        SlipDirection::West => pb::SlipDirection::West,
+        SlipDirection::Clockwise => pb::SlipDirection::Clockwise,
+        SlipDirection::Anticlockwise => pb::SlipDirection::Anticlockwise,
+    }) as i32
 }

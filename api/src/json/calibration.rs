@@ -25,6 +25,10 @@ pub struct CalibrationRecordingJson {
     /// whole (instead of cw_csv and cv_csv).
     #[serde(default)]
     pub event: Option<String>,
+    /// The direction the recording slips in: north, east, south, west, clockwise,
+    /// anticlockwise (or n, e, s, w, cw, aw).
+    #[serde(default)]
+    pub slip_direction: Option<String>,
 }
 
 /// The body of `POST /v1/tactile/calibrations` (the proto's CalibrateRequest).
@@ -61,6 +65,7 @@ impl From<CalibrateJson> for CalibrationUpload {
                     cw_csv: r.cw_csv,
                     cv_csv: r.cv_csv,
                     event: r.event,
+                    slip_direction: r.slip_direction,
                 })
                 .collect(),
         }
@@ -100,6 +105,9 @@ pub struct CalibrationJson {
     pub persisted: bool,
     /// Fitted on electrodes-only recordings: sessions use it on electrodes_only fingers.
     pub electrodes_only: bool,
+    /// The slip directions fitted with their training windows; empty without a direction
+    /// classifier.
+    pub direction_windows: Vec<LabelCountJson>,
 }
 
 impl From<&CalibrationInfo> for CalibrationJson {
@@ -130,6 +138,15 @@ impl From<&CalibrationInfo> for CalibrationJson {
             fit_ms: c.summary.fit_ms,
             persisted: info.persisted,
             electrodes_only: c.settings.electrodes_only,
+            direction_windows: c
+                .summary
+                .direction_windows
+                .iter()
+                .map(|(label, n)| LabelCountJson {
+                    label: label.clone(),
+                    windows: *n,
+                })
+                .collect(),
         }
     }
 }

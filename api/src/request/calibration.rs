@@ -16,6 +16,9 @@ pub struct RecordingUpload {
     /// The contact event of every frame (`non_contact`, `contact` or `slip`), for a recording
     /// labelled as a whole (a held touch, a slide) instead of by the arm's files.
     pub event: Option<String>,
+    /// The direction the recording slips in (north, east, south, west, clockwise,
+    /// anticlockwise, or the BioTac SP data's n, e, s, w, cw, aw).
+    pub slip_direction: Option<String>,
 }
 
 /// A calibration request in domain terms.

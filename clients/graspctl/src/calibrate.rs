@@ -6,8 +6,9 @@
 //! named otherwise — an electrodes-only CSV is told by its columns, `tactile::recording`), with
 //! the arm's `*_cw.csv` and `*_cv.csv` beside it when present (frame events). A recording's
 //! labels are given by its folder (relative to DIR): a `labels.csv` in DIR (or `--labels FILE`)
-//! maps folders to labels, one `folder,material[,event]` per line (`mat5,plastic/mat5`; a held
-//! touch `t,,contact`, a slide `n,,slip`: the event of every frame of the folder's recordings);
+//! maps folders to labels, one `folder,material[,event[,slip direction]]` per line
+//! (`mat5,plastic/mat5`; a held touch `t,,contact`, a slide north `n,,slip,north`: the event
+//! of every frame of the folder's recordings and the direction they slip in);
 //! without one the folder's own path is the material (`DIR/foam/…`, `DIR/plastic/eva/…`).
 
 use crate::{CliError, connect_tactile};
@@ -67,11 +68,13 @@ pub struct CalibrateArgs {
     all_csv: bool,
 }
 
-/// A folder's labels: its material and the event of every frame, either optional.
+/// A folder's labels: its material, the event of every frame and the slip direction, each
+/// optional.
 #[derive(Debug, Clone, Default, PartialEq)]
 struct FolderLabels {
     material: Option<String>,
     event: Option<String>,
+    slip_direction: Option<String>,
 }
 
 /// The recordings under `dir`, at most two folders deep, sorted: `*_bio.csv`, or with `all_csv`
@@ -107,7 +110,8 @@ fn read(path: &Path) -> Result<String, CliError> {
     })
 }
 
-/// folder → labels from a labels file (`folder,material[,event]`, either label may be empty).
+/// folder → labels from a labels file (`folder,material[,event[,slip direction]]`, any label
+/// may be empty).
 fn labels(path: &Path) -> Result<BTreeMap<String, FolderLabels>, CliError> {
     let mut map = BTreeMap::new();
     for (i, line) in read(path)?.lines().enumerate() {
@@ -116,15 +120,16 @@ fn labels(path: &Path) -> Result<BTreeMap<String, FolderLabels>, CliError> {
             continue;
         }
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        let (folder, material, event) = match fields[..] {
-            [f, m] => (f, m, ""),
-            [f, m, e] => (f, m, e),
+        let (folder, material, event, direction) = match fields[..] {
+            [f, m] => (f, m, "", ""),
+            [f, m, e] => (f, m, e, ""),
+            [f, m, e, d] => (f, m, e, d),
             _ => {
                 return Err(CliError::File {
                     path: path.to_path_buf(),
                     error: FieldError::new(
                         format!("line {}", i + 1),
-                        "expected folder,material or folder,material,event",
+                        "expected folder,material[,event[,slip direction]]",
                     ),
                 });
             }
@@ -135,6 +140,7 @@ fn labels(path: &Path) -> Result<BTreeMap<String, FolderLabels>, CliError> {
             FolderLabels {
                 material: text(material),
                 event: text(event),
+                slip_direction: text(direction),
             },
         );
     }
@@ -160,11 +166,15 @@ impl CalibrateArgs {
                 .and_then(|p| p.strip_prefix(&self.dir).ok())
                 .map(|p| p.to_string_lossy().replace('\\', "/"))
                 .unwrap_or_default();
-            let FolderLabels { material, event } = match &labels {
+            let FolderLabels {
+                material,
+                event,
+                slip_direction,
+            } = match &labels {
                 Some(l) => l.get(&folder).cloned().unwrap_or_default(),
                 None => FolderLabels {
                     material: (!folder.is_empty()).then(|| folder.clone()),
-                    event: None,
+                    ..FolderLabels::default()
                 },
             };
             let sibling = |kind: &str| {
@@ -183,6 +193,7 @@ impl CalibrateArgs {
                 cw_csv: cw,
                 cv_csv: cv,
                 event,
+                slip_direction,
             });
         }
         let tare = if self.pretared {
@@ -209,19 +220,32 @@ impl CalibrateArgs {
 
 /// One calibration as text.
 fn summary(c: &pb::CalibrationInfo) -> String {
-    let labels: Vec<String> = c
-        .material_windows
-        .iter()
-        .map(|l| format!("{} {}", l.label, l.windows))
-        .collect();
+    let counts = |v: &[pb::LabelCount]| {
+        if v.is_empty() {
+            return "none".to_string();
+        }
+        let text: Vec<String> = v
+            .iter()
+            .map(|l| format!("{} {}", l.label, l.windows))
+            .collect();
+        text.join(", ")
+    };
     let events = match c.event_windows.as_slice() {
         [a, b, s] if a + b + s > 0 => {
             format!("non-contact {a}, contact {b}, slip {s}")
         }
         _ => "none".into(),
     };
+    let directions = if c.direction_windows.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "  slip direction windows: {}\n",
+            counts(&c.direction_windows)
+        )
+    };
     format!(
-        "{}: {} electrodes{}, windows of {} every {}, {} recordings fitted in {:.0} ms{}\n  material windows: {}\n  event windows: {events}\n",
+        "{}: {} electrodes{}, windows of {} every {}, {} recordings fitted in {:.0} ms{}\n  material windows: {}\n  event windows: {events}\n{directions}",
         c.name,
         c.electrodes,
         if c.electrodes_only {
@@ -234,11 +258,7 @@ fn summary(c: &pb::CalibrationInfo) -> String {
         c.recordings,
         c.fit_ms,
         if c.persisted { "" } else { " (in memory only)" },
-        if labels.is_empty() {
-            "none".to_string()
-        } else {
-            labels.join(", ")
-        },
+        counts(&c.material_windows),
     )
 }
 
@@ -335,5 +355,13 @@ fn calibration_json(c: &pb::CalibrationInfo) -> Result<CalibrationJson, CliError
         fit_ms: c.fit_ms,
         persisted: c.persisted,
         electrodes_only: c.electrodes_only,
+        direction_windows: c
+            .direction_windows
+            .iter()
+            .map(|l| LabelCountJson {
+                label: l.label.clone(),
+                windows: l.windows as usize,
+            })
+            .collect(),
     })
 }

@@ -267,6 +267,7 @@ fn fit_calibration() -> Option<Arc<Calibration>> {
                 material: Some(format!("{class}/{mat}")),
                 readings: rec.rows.iter().map(|r| r.reading()).collect(),
                 events: None,
+                slip_direction: None,
             });
         }
     }

@@ -73,6 +73,7 @@ fn recording(s: &Sample) -> CalibrationRecording {
         }),
         readings: s.frames.iter().map(|f| f.fingers[0].clone()).collect(),
         events: Some(s.events.clone()),
+        slip_direction: None,
     }
 }
 

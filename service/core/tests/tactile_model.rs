@@ -116,6 +116,7 @@ impl EventDetector for Recorder {
             event_probabilities: [1.0, 0.0, 0.0],
             material: Material::Unknown,
             material_probabilities: None,
+            slip_direction: None,
         }
     }
 }

@@ -95,10 +95,12 @@ mod tests {
             settings: CalibrationSettings::default(),
             material: Some(LinearDiscriminant::fit(&examples, "recordings").unwrap()),
             events: None,
+            slip_direction: None,
             summary: CalibrationSummary {
                 recordings: 3,
                 material_windows: vec![("foam".into(), 2), ("metal".into(), 1)],
                 event_windows: [0; 3],
+                direction_windows: Vec::new(),
                 fit_ms: 1.5,
             },
         }

@@ -81,6 +81,55 @@ impl Material {
     }
 }
 
+/// The direction a held object slips in, on the sensor's own skin: four translations (north,
+/// east, south, west: the sensor's own axes) and two turns — the six slip labels of the BioTac
+/// SP direction-of-slip recordings (yayaneath/BioTacSP-DoS: n, e, s, w, cw, aw). Only a
+/// calibration fitted on recordings labelled with directions reports one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SlipDirection {
+    North,
+    East,
+    South,
+    West,
+    Clockwise,
+    Anticlockwise,
+}
+
+impl SlipDirection {
+    /// In the order of the probability vectors.
+    pub const ALL: [SlipDirection; 6] = [
+        Self::North,
+        Self::East,
+        Self::South,
+        Self::West,
+        Self::Clockwise,
+        Self::Anticlockwise,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::North => "north",
+            Self::East => "east",
+            Self::South => "south",
+            Self::West => "west",
+            Self::Clockwise => "clockwise",
+            Self::Anticlockwise => "anticlockwise",
+        }
+    }
+
+    /// A name or the data's short label (n, e, s, w, cw, aw), any case.
+    pub fn parse(text: &str) -> Option<Self> {
+        let t = text.trim().to_ascii_lowercase();
+        let short = ["n", "e", "s", "w", "cw", "aw"];
+        Self::ALL
+            .into_iter()
+            .zip(short)
+            .find(|(d, s)| d.name() == t || *s == t)
+            .map(|(d, _)| d)
+    }
+}
+
 /// One sampled reading of t_seq, tared ("larger = more contact", see `taring`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct DetectorSample {
@@ -106,6 +155,10 @@ pub struct Detection {
     pub material: Material,
     /// P(paper), P(foam), P(plastic), P(metal); `None` when not estimated.
     pub material_probabilities: Option<[f64; 4]>,
+    /// The direction a slip would take and P over [`SlipDirection::ALL`], from a calibration
+    /// fitted on directions, in contact; `None` otherwise (the session reports it only while
+    /// the finger slips).
+    pub slip_direction: Option<(SlipDirection, [f64; 6])>,
 }
 
 /// Anything that turns a window t_seq into a detection: the model-free detector here, an LSTM
@@ -312,6 +365,7 @@ impl EventDetector for ModelFreeDetector {
             event_probabilities: probs,
             material: Material::Unknown,
             material_probabilities: None,
+            slip_direction: None,
         }
     }
 }

@@ -474,6 +474,7 @@ impl LstmDetector {
                     event_probabilities: ev,
                     material,
                     material_probabilities,
+                    slip_direction: None,
                 }
             }
             Err(e) => {

@@ -27,7 +27,7 @@ pub use calibration::{
 pub use desired_force::{ControlMode, DesiredForceLaw};
 pub use detector::{
     ContactEvent, Detection, EventDetector, Material, ModelFreeDetector, ModelFreeThresholds,
-    WindowSampler,
+    SlipDirection, WindowSampler,
 };
 pub use force_estimation::{ContactEstimate, EmOptions, ForceEstimator, Gmm1d};
 pub use layout::{LayoutSpec, SensorCatalog, SensorLayout, parse_layout_toml};

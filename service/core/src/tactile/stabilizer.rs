@@ -18,7 +18,7 @@ use super::centroid_slip::{CentroidTracker, contact_centroid};
 use super::desired_force::{ControlMode, DesiredForceLaw};
 use super::detector::{
     ContactEvent, Detection, DetectorSample, EventDetector, Material, ModelFreeDetector,
-    ModelFreeThresholds, WindowSampler, check_window,
+    ModelFreeThresholds, SlipDirection, WindowSampler, check_window,
 };
 use super::force_estimation::{EmOptions, ForceEstimator};
 use super::layout::SensorLayout;
@@ -214,6 +214,12 @@ pub struct FingerResult {
     pub material: Material,
     /// P(paper), P(foam), P(plastic), P(metal), when known and in contact.
     pub material_probabilities: Option<[f64; 4]>,
+    /// The direction of the slip, while slipping, when the session's calibration was fitted
+    /// on directions.
+    pub slip_direction: Option<SlipDirection>,
+    /// P over [`SlipDirection::ALL`] (north, east, south, west, clockwise, anticlockwise) with
+    /// `slip_direction`.
+    pub slip_direction_probabilities: Option<[f64; 6]>,
     /// Estimated normal force f (Eq 6.7).
     pub force: f64,
     pub force_unit: ForceUnit,
@@ -599,6 +605,7 @@ impl FingerState {
                 event_probabilities: [1.0, 0.0, 0.0],
                 material: Material::Unknown,
                 material_probabilities: None,
+                slip_direction: None,
             }
         };
         let in_contact = detection.event != ContactEvent::NonContact;
@@ -646,6 +653,9 @@ impl FingerState {
             }
             ControlMode::Force => Some(self.pid.step(desired_force, psi.force, dt)),
         };
+        let direction = detection
+            .slip_direction
+            .filter(|_| detection.event == ContactEvent::Slip);
         FingerResult {
             finger: self.config.name.clone(),
             tared: self.source.is_ready(),
@@ -653,6 +663,8 @@ impl FingerState {
             event_probabilities: detection.event_probabilities,
             material,
             material_probabilities,
+            slip_direction: direction.map(|(d, _)| d),
+            slip_direction_probabilities: direction.map(|(_, p)| p),
             force: psi.force,
             force_unit: unit,
             contact_location: if in_contact { psi.location } else { None },

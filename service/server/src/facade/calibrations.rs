@@ -8,7 +8,7 @@ use crate::hand_store::check_name;
 pub use graspd_api::request::{CalibrationInfo, CalibrationUpload, RecordingUpload};
 use graspd_core::FieldError;
 use graspd_core::tactile::{
-    Calibration, CalibrationRecording, CalibrationSettings, ContactEvent, Recording,
+    Calibration, CalibrationRecording, CalibrationSettings, ContactEvent, Recording, SlipDirection,
     StabilizerConfig,
 };
 use std::collections::BTreeMap;
@@ -300,6 +300,22 @@ fn parse_recording(
                 })?,
         ),
     };
+    let slip_direction = r
+        .slip_direction
+        .as_deref()
+        .map(|name| {
+            SlipDirection::parse(name).ok_or_else(|| {
+                FieldError::new(
+                    format!("{field}.slip_direction"),
+                    format!(
+                        "unknown slip direction '{}': one of north, east, south, west, \
+                         clockwise, anticlockwise (or n, e, s, w, cw, aw)",
+                        name.escape_debug()
+                    ),
+                )
+            })
+        })
+        .transpose()?;
     let rec = Recording::from_csv(&r.bio_csv, r.cw_csv.as_deref(), r.cv_csv.as_deref())
         .map_err(|e| FieldError::new(format!("{field}.{}", e.field), e.message))?;
     let events = event.map(|e| vec![e; rec.rows.len()]).or(rec.labels);
@@ -308,6 +324,7 @@ fn parse_recording(
             material: r.material.clone(),
             readings: rec.rows.iter().map(|row| row.reading()).collect(),
             events,
+            slip_direction,
         },
         rec.electrodes_only,
     ))

@@ -12,7 +12,7 @@ pub mod features;
 
 use super::detector::{
     ContactEvent, Detection, DetectorSample, EventDetector, Material, ModelFreeDetector,
-    ModelFreeThresholds, WindowSampler, check_window,
+    ModelFreeThresholds, SlipDirection, WindowSampler, check_window,
 };
 use super::layout::MAX_ELECTRODES;
 use super::readings::{FingerReading, SampleSource};
@@ -32,6 +32,8 @@ pub struct CalibrationRecording {
     pub readings: Vec<FingerReading>,
     /// The contact event of every reading, if labelled (as many as `readings`).
     pub events: Option<Vec<ContactEvent>>,
+    /// The direction the recording slips in, if labelled (its slipping windows teach it).
+    pub slip_direction: Option<SlipDirection>,
 }
 
 /// How recordings become windows: as a session with these settings would see them.
@@ -70,6 +72,9 @@ pub struct CalibrationSummary {
     pub material_windows: Vec<(String, usize)>,
     /// Windows per event: non-contact, contact, slip.
     pub event_windows: [usize; 3],
+    /// Windows per slip direction, sorted by label.
+    #[serde(default)]
+    pub direction_windows: Vec<(String, usize)>,
     /// Wall time of the fit, ms.
     pub fit_ms: f64,
 }
@@ -85,6 +90,10 @@ pub struct Calibration {
     pub material: Option<LinearDiscriminant>,
     /// The event classifier (labels non_contact, contact, slip), when frames were labelled.
     pub events: Option<LinearDiscriminant>,
+    /// The slip-direction classifier, when recordings were labelled with two or more
+    /// directions.
+    #[serde(default)]
+    pub slip_direction: Option<LinearDiscriminant>,
     pub summary: CalibrationSummary,
 }
 
@@ -132,6 +141,7 @@ impl Calibration {
         let features = Features::for_sensor(settings.electrodes_only);
         let mut material_examples: Vec<(String, Vec<f64>)> = Vec::new();
         let mut event_examples: Vec<(String, Vec<f64>)> = Vec::new();
+        let mut direction_examples: Vec<(String, Vec<f64>)> = Vec::new();
         for rec in recordings {
             let mut source = SampleSource::new(settings.tare, electrodes)
                 .electrodes_only(settings.electrodes_only);
@@ -151,6 +161,13 @@ impl Calibration {
                 {
                     material_examples.push((m.clone(), x.clone()));
                 }
+                // A direction is taught by the recording's slipping windows (all of them when
+                // its frames carry no events).
+                if let Some(d) = rec.slip_direction
+                    && event.is_none_or(|e| e == ContactEvent::Slip)
+                {
+                    direction_examples.push((d.name().to_string(), x.clone()));
+                }
                 if let Some(e) = event {
                     event_examples.push((e.name().to_string(), x));
                 }
@@ -158,10 +175,12 @@ impl Calibration {
         }
         let labelled_materials = recordings.iter().any(|r| r.material.is_some());
         let labelled_events = recordings.iter().any(|r| r.events.is_some());
-        if !labelled_materials && !labelled_events {
+        let labelled_directions = recordings.iter().any(|r| r.slip_direction.is_some());
+        if !labelled_materials && !labelled_events && !labelled_directions {
             return Err(FieldError::new(
                 "recordings",
-                "no labels: give each recording its material, or its frames' events",
+                "no labels: give each recording its material, its frames' events or its slip \
+                 direction",
             ));
         }
         let fit = |examples: &[(String, Vec<f64>)], field: &str| {
@@ -186,6 +205,15 @@ impl Calibration {
         } else {
             None
         };
+        let slip_direction = if labelled_directions {
+            fit(&direction_examples, "recordings[].slip_direction")?
+        } else {
+            None
+        };
+        let mut direction_windows: BTreeMap<String, usize> = BTreeMap::new();
+        for (l, _) in &direction_examples {
+            *direction_windows.entry(l.clone()).or_default() += 1;
+        }
         let mut material_windows: BTreeMap<String, usize> = BTreeMap::new();
         for (l, _) in &material_examples {
             *material_windows.entry(l.clone()).or_default() += 1;
@@ -202,10 +230,12 @@ impl Calibration {
             settings,
             material,
             events,
+            slip_direction,
             summary: CalibrationSummary {
                 recordings: recordings.len(),
                 material_windows: material_windows.into_iter().collect(),
                 event_windows,
+                direction_windows: direction_windows.into_iter().collect(),
                 fit_ms: start.elapsed().as_secs_f64() * 1e3,
             },
         })
@@ -346,6 +376,23 @@ impl EventDetector for CalibratedDetector {
             d.material = Material::CLASSES[best];
             d.material_probabilities = Some(probs);
         }
+        // The direction a slip would take, whenever in contact: the session reports it only
+        // when the finger slips, whichever rule said so (the calibration's, or the contact
+        // centroid's motion).
+        if let Some(directions) = &c.slip_direction
+            && d.event != ContactEvent::NonContact
+        {
+            let mut probs = [0.0; 6];
+            for (name, q) in directions.class_probabilities(&x) {
+                if let Some(k) = SlipDirection::ALL.iter().position(|s| s.name() == name) {
+                    probs[k] = q;
+                }
+            }
+            let best = (0..6)
+                .max_by(|&a, &b| probs[a].total_cmp(&probs[b]))
+                .unwrap_or(0);
+            d.slip_direction = Some((SlipDirection::ALL[best], probs));
+        }
         d
     }
 }
@@ -388,6 +435,7 @@ mod tests {
             material: Some(material.into()),
             readings: slide(bin, 200, seed),
             events: None,
+            slip_direction: None,
         }
     }
 
@@ -492,6 +540,7 @@ mod tests {
             material: None,
             readings,
             events: Some(vec![event; frames]),
+            slip_direction: None,
         }
     }
 
@@ -561,6 +610,100 @@ mod tests {
         )
         .unwrap_err();
         assert_eq!(e.field, "recordings[0].readings[0].pac");
+    }
+
+    /// A slide whose pressed spot crosses the row of 4 electrodes east (rising index) or west,
+    /// again every second.
+    fn slide_towards(direction: SlipDirection, frames: usize, seed: u64) -> CalibrationRecording {
+        let mut rec = electrodes_only(true, frames, seed);
+        for (f, r) in rec.readings.iter_mut().enumerate() {
+            let t = (f % 100) as f64 / 100.0;
+            let spot = match direction {
+                SlipDirection::East => 0.5 + 2.0 * t,
+                _ => 2.5 - 2.0 * t,
+            };
+            let noise = 0.1 * ((f as u64 * 31 + seed) % 7) as f64;
+            for (e, v) in r.electrodes.iter_mut().enumerate() {
+                *v = 30.0 * (-(e as f64 - spot).powi(2)).exp() + noise;
+            }
+        }
+        rec.slip_direction = Some(direction);
+        rec
+    }
+
+    /// Fitted on held touches and slides labelled east and west, a session names the
+    /// direction of a new slide while it slips, and names none out of slip.
+    #[test]
+    fn a_calibration_on_labelled_directions_names_the_slip_direction() {
+        let mut recs: Vec<CalibrationRecording> =
+            (0..3).map(|k| electrodes_only(false, 200, k)).collect();
+        for k in 0..3 {
+            recs.push(slide_towards(SlipDirection::East, 200, k));
+            recs.push(slide_towards(SlipDirection::West, 200, k + 10));
+        }
+        let settings = CalibrationSettings {
+            window_length: 8,
+            stride: 2,
+            electrodes_only: true,
+            ..settings()
+        };
+        let c = Arc::new(Calibration::fit("dos", &recs, settings).unwrap());
+        assert_eq!(
+            c.summary.direction_windows,
+            vec![("east".to_string(), 3 * 93), ("west".to_string(), 3 * 93)]
+        );
+        let layout = SensorLayout::from_spec(LayoutSpec {
+            name: "row".into(),
+            description: String::new(),
+            electrodes: vec![[0.0, 0.0], [4.0, 0.0], [8.0, 0.0], [12.0, 0.0]],
+        })
+        .unwrap();
+        for test in [
+            slide_towards(SlipDirection::East, 200, 5),
+            slide_towards(SlipDirection::West, 200, 6),
+            electrodes_only(false, 200, 7),
+        ] {
+            let mut config = StabilizerConfig {
+                fingers: vec![FingerConfig {
+                    electrodes_only: true,
+                    name: "ff".into(),
+                    layout: layout.clone(),
+                    tare: TareConfig::pretared(),
+                }],
+                ..StabilizerConfig::default()
+            };
+            (config.window_length, config.stride) = (8, 2);
+            let detector: Box<dyn EventDetector> = Box::new(CalibratedDetector::new(
+                c.clone(),
+                ModelFreeThresholds::default(),
+            ));
+            let mut s = Stabilizer::with_detectors(config, vec![detector]).unwrap();
+            let (mut slipping, mut right) = (0, 0);
+            for (i, r) in test.readings.into_iter().enumerate() {
+                let out = s
+                    .step(&Frame {
+                        timestamp: i as f64 * 0.01,
+                        fingers: vec![r],
+                    })
+                    .unwrap();
+                let f = &out.fingers[0];
+                if f.event == ContactEvent::Slip {
+                    slipping += 1;
+                    right += usize::from(f.slip_direction == test.slip_direction);
+                } else {
+                    assert_eq!(f.slip_direction, None, "frame {i}");
+                }
+            }
+            // A window that straddles the spot's jump back (16 frames in every 100) sees the
+            // opposite motion.
+            match test.slip_direction {
+                Some(d) => assert!(
+                    slipping > 150 && right as f64 >= 0.8 * slipping as f64,
+                    "{d:?}: {right} of {slipping} slipping frames"
+                ),
+                None => assert!(slipping < 10, "a touch slipped in {slipping} frames"),
+            }
+        }
     }
 
     #[test]
