@@ -133,4 +133,36 @@ mod tests {
         assert!(load_dir(&dir).unwrap().is_empty());
         let _ = std::fs::remove_dir_all(&dir);
     }
+
+    /// A calibration stored before sensors that give only their electrodes and slip directions
+    /// existed (no `electrodes_only`, `slip_direction` or `direction_windows`) loads as a
+    /// BioTac calibration without a direction classifier.
+    #[test]
+    fn a_calibration_stored_by_an_older_server_still_loads() {
+        let dir = std::env::temp_dir().join(format!("graspd-cal-old-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let a = calibration("old");
+        save(&dir, &a).unwrap();
+        let mut json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("old.json")).unwrap()).unwrap();
+        let o = json.as_object_mut().unwrap();
+        assert!(o.remove("slip_direction").is_some());
+        assert!(
+            o["settings"]
+                .as_object_mut()
+                .unwrap()
+                .remove("electrodes_only")
+                .is_some()
+        );
+        assert!(
+            o["summary"]
+                .as_object_mut()
+                .unwrap()
+                .remove("direction_windows")
+                .is_some()
+        );
+        std::fs::write(dir.join("old.json"), json.to_string()).unwrap();
+        assert_eq!(load_dir(&dir).unwrap(), vec![a]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

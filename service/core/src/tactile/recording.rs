@@ -151,7 +151,23 @@ pub fn parse_bio_csv(text: &str) -> Result<Vec<BioRow>, FieldError> {
 pub fn parse_bio_file(text: &str) -> Result<BioFile, FieldError> {
     const WHAT: &str = "bio_csv";
     let (names, rows) = parse_numeric_csv(text, WHAT)?;
-    if !names.iter().any(|n| n.eq_ignore_ascii_case("pdc")) {
+    let named = |want: &str| {
+        names
+            .iter()
+            .any(|n| n.to_ascii_lowercase().starts_with(want))
+    };
+    if !named("pdc") {
+        // A BioTac file that lost its pdc column is not an electrodes-only one: its thermal
+        // and pac columns would be read as electrodes.
+        if let Some(other) = ["tdc", "tac", "pac"].into_iter().find(|c| named(c)) {
+            return Err(FieldError::new(
+                WHAT,
+                format!(
+                    "a '{other}' column but no 'pdc': a BioTac file needs pdc, an electrodes-only \
+                     file has only electrode columns (and timestamp)"
+                ),
+            ));
+        }
         return electrodes_only_file(&names, rows);
     }
     let ts = column(&names, "timestamp", WHAT)?;
@@ -403,6 +419,9 @@ mod tests {
         assert_eq!(e.field, "cw_csv");
         let e = parse_bio_file("timestamp\n1\n").unwrap_err();
         assert!(e.message.contains("no electrode columns"), "{e}");
+        // A BioTac file without its pdc column is refused, not read as electrodes.
+        let e = parse_bio_file("timestamp,tdc,tac,pac1,ele1\n1,2,3,4,5\n").unwrap_err();
+        assert!(e.message.contains("a 'tdc' column but no 'pdc'"), "{e}");
         assert!(
             !Recording::from_csv(BIO, None, None)
                 .unwrap()
