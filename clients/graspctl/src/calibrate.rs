@@ -331,6 +331,14 @@ pub async fn run(
 
 /// The answer in the REST API's shape (`CalibrationJson`).
 fn calibration_json(c: &pb::CalibrationInfo) -> Result<CalibrationJson, CliError> {
+    let label_counts = |v: &[pb::LabelCount]| -> Vec<LabelCountJson> {
+        v.iter()
+            .map(|l| LabelCountJson {
+                label: l.label.clone(),
+                windows: l.windows as usize,
+            })
+            .collect()
+    };
     let windows = |i: usize| c.event_windows.get(i).map_or(0, |&n| n as usize);
     Ok(CalibrationJson {
         name: c.name.clone(),
@@ -338,14 +346,7 @@ fn calibration_json(c: &pb::CalibrationInfo) -> Result<CalibrationJson, CliError
         window_length: c.window_length as usize,
         stride: c.stride as usize,
         tare: convert::tare_from_proto(c.tare, "tare").map_err(CliError::Answer)?,
-        material_windows: c
-            .material_windows
-            .iter()
-            .map(|l| LabelCountJson {
-                label: l.label.clone(),
-                windows: l.windows as usize,
-            })
-            .collect(),
+        material_windows: label_counts(&c.material_windows),
         event_windows: (c.event_windows.iter().sum::<u64>() > 0).then(|| EventWindowsJson {
             non_contact: windows(0),
             contact: windows(1),
@@ -355,13 +356,6 @@ fn calibration_json(c: &pb::CalibrationInfo) -> Result<CalibrationJson, CliError
         fit_ms: c.fit_ms,
         persisted: c.persisted,
         electrodes_only: c.electrodes_only,
-        direction_windows: c
-            .direction_windows
-            .iter()
-            .map(|l| LabelCountJson {
-                label: l.label.clone(),
-                windows: l.windows as usize,
-            })
-            .collect(),
+        direction_windows: label_counts(&c.direction_windows),
     })
 }

@@ -544,6 +544,29 @@ mod tests {
         }
     }
 
+    /// A session of one electrodes_only finger on the row of 4 electrodes (4 mm apart),
+    /// pretared, windows of 8 every 2nd reading, detecting with `c`.
+    fn row_session(c: &Arc<Calibration>) -> Stabilizer {
+        let layout = SensorLayout::from_spec(LayoutSpec {
+            name: "row".into(),
+            description: String::new(),
+            electrodes: vec![[0.0, 0.0], [4.0, 0.0], [8.0, 0.0], [12.0, 0.0]],
+        })
+        .unwrap();
+        let mut config = StabilizerConfig::for_fingers(vec![FingerConfig {
+            electrodes_only: true,
+            name: "ff".into(),
+            layout,
+            tare: TareConfig::pretared(),
+        }]);
+        (config.window_length, config.stride) = (8, 2);
+        let detector: Box<dyn EventDetector> = Box::new(CalibratedDetector::new(
+            c.clone(),
+            ModelFreeThresholds::default(),
+        ));
+        Stabilizer::with_detectors(config, vec![detector]).unwrap()
+    }
+
     /// Fitted on held touches and slides of a sensor that gives only its electrodes, a session
     /// whose finger is electrodes_only names a new slide slip and a new touch contact once its
     /// window is full; the same recordings do not fit a calibration that reads pac.
@@ -563,28 +586,8 @@ mod tests {
         assert_eq!(c.events.as_ref().unwrap().labels, vec!["contact", "slip"]);
         // 150 readings, windows of 8 every 2nd: full from reading 14 on, 68 per recording.
         assert_eq!(c.summary.event_windows, [0, 3 * 68, 3 * 68]);
-        let layout = SensorLayout::from_spec(LayoutSpec {
-            name: "row".into(),
-            description: String::new(),
-            electrodes: vec![[0.0, 0.0], [4.0, 0.0], [8.0, 0.0], [12.0, 0.0]],
-        })
-        .unwrap();
         for (slides, want) in [(true, ContactEvent::Slip), (false, ContactEvent::Contact)] {
-            let mut config = StabilizerConfig {
-                fingers: vec![FingerConfig {
-                    electrodes_only: true,
-                    name: "ff".into(),
-                    layout: layout.clone(),
-                    tare: TareConfig::pretared(),
-                }],
-                ..StabilizerConfig::default()
-            };
-            (config.window_length, config.stride) = (8, 2);
-            let detector: Box<dyn EventDetector> = Box::new(CalibratedDetector::new(
-                c.clone(),
-                ModelFreeThresholds::default(),
-            ));
-            let mut s = Stabilizer::with_detectors(config, vec![detector]).unwrap();
+            let mut s = row_session(&c);
             let test = electrodes_only(slides, 120, 7);
             let mut named = 0;
             for (i, r) in test.readings.into_iter().enumerate() {
@@ -652,32 +655,12 @@ mod tests {
             c.summary.direction_windows,
             vec![("east".to_string(), 3 * 93), ("west".to_string(), 3 * 93)]
         );
-        let layout = SensorLayout::from_spec(LayoutSpec {
-            name: "row".into(),
-            description: String::new(),
-            electrodes: vec![[0.0, 0.0], [4.0, 0.0], [8.0, 0.0], [12.0, 0.0]],
-        })
-        .unwrap();
         for test in [
             slide_towards(SlipDirection::East, 200, 5),
             slide_towards(SlipDirection::West, 200, 6),
             electrodes_only(false, 200, 7),
         ] {
-            let mut config = StabilizerConfig {
-                fingers: vec![FingerConfig {
-                    electrodes_only: true,
-                    name: "ff".into(),
-                    layout: layout.clone(),
-                    tare: TareConfig::pretared(),
-                }],
-                ..StabilizerConfig::default()
-            };
-            (config.window_length, config.stride) = (8, 2);
-            let detector: Box<dyn EventDetector> = Box::new(CalibratedDetector::new(
-                c.clone(),
-                ModelFreeThresholds::default(),
-            ));
-            let mut s = Stabilizer::with_detectors(config, vec![detector]).unwrap();
+            let mut s = row_session(&c);
             let (mut slipping, mut right) = (0, 0);
             for (i, r) in test.readings.into_iter().enumerate() {
                 let out = s
