@@ -64,6 +64,7 @@ fn session(model_free: bool) -> pb::TactileSession {
             layout: LayoutChoice::Name("biotac".into()),
             tare: TareConfig::pretared(),
             electrodes_only: false,
+            calibration: None,
         }],
         config: StabilizerConfig {
             detector: if model_free {

@@ -40,6 +40,7 @@ fn session() -> pb::TactileSession {
             layout: LayoutChoice::Name("biotac".into()),
             tare: TareConfig::pretared(),
             electrodes_only: false,
+            calibration: None,
         }],
         config: StabilizerConfig::default(),
     })
@@ -354,6 +355,7 @@ async fn an_electrodes_only_finger_runs_on_a_real_biotac_sp_recording() {
             ..Default::default()
         }),
         electrodes_only: true,
+        calibration: None,
     });
     let open = open(&server, session).await.expect("session opens");
     let (answers, end) = exchange(open, &frames).await;

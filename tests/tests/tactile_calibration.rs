@@ -291,6 +291,14 @@ async fn bad_calibrations_and_sessions_that_do_not_fit_are_refused_naming_the_fi
             json!({"detector": {"calibration": "slide"}, "fingers": [{"name": "ff", "layout": "biotac", "tare": {"pretared": true}, "electrodes_only": true}]}),
             "session.fingers[0].electrodes_only",
         ),
+        (
+            json!({"fingers": [{"name": "ff", "layout": "biotac", "tare": {"pretared": true}}, {"name": "th", "layout": "biotac", "tare": {"pretared": true}, "calibration": "nope"}]}),
+            "session.fingers[1].calibration",
+        ),
+        (
+            json!({"fingers": [{"name": "ff", "layout": "biotac", "calibration": "slide"}]}),
+            "session.fingers[0].tare",
+        ),
     ] {
         let mut s =
             json!({"fingers": [{"name": "ff", "layout": "biotac", "tare": {"pretared": true}}]});
@@ -317,6 +325,7 @@ async fn bad_calibrations_and_sessions_that_do_not_fit_are_refused_naming_the_fi
                     ..Default::default()
                 }),
                 electrodes_only: false,
+                calibration: None,
             }],
             detector: Some(pb::TactileDetector {
                 kind: Some(pb::tactile_detector::Kind::Calibration("nope".into())),
@@ -441,6 +450,33 @@ async fn an_electrodes_only_calibration_tells_slides_from_touches() {
             (slip, frames.len())
         }
     };
+    // The same calibration named by the finger itself, the session's detector left to its
+    // default: only a calibration names a direction.
+    let form = reqwest::multipart::Form::new()
+        .part(
+            "bio_csv",
+            reqwest::multipart::Part::text(dos("n", "pen", 1)).file_name("pen.csv"),
+        )
+        .text(
+            "session",
+            json!({"fingers": [{"name": "ff", "layout": "biotac_sp", "electrodes_only": true, "calibration": "sp"}]})
+                .to_string(),
+        );
+    let response = http()
+        .post(server.rest_url("/v1/tactile/analyze"))
+        .multipart(form)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    let body: serde_json::Value = response.json().await.unwrap();
+    let named = body["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["fingers"][0]["slip_direction"].is_string())
+        .count();
+    assert!(named > 0, "no frame named a direction");
     let (touch, n) = slip_frames(dos("t", "pen", 0)).await;
     let (slide, m) = slip_frames(dos("n", "pen", 0)).await;
     assert!(n > 200 && m > 200, "{n} and {m} frames");

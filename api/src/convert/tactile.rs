@@ -74,6 +74,7 @@ pub fn tactile_session_from_proto(
                 layout,
                 tare,
                 electrodes_only: f.electrodes_only,
+                calibration: f.calibration,
             })
         })
         .collect::<Result<Vec<_>, FieldError>>()?;
@@ -193,6 +194,7 @@ pub fn tactile_session_to_proto(r: &TactileSessionRequest) -> pb::TactileSession
                 }),
                 tare: Some(tare_to_proto(&f.tare)),
                 electrodes_only: f.electrodes_only,
+                calibration: f.calibration.clone(),
             })
             .collect(),
         window_length: Some(c.window_length.min(u32::MAX as usize) as u32),

@@ -44,6 +44,10 @@ pub struct TactileFingerJson {
     /// are not read; contact from the electrodes, slip from the contact centroid's motion.
     #[serde(default)]
     pub electrodes_only: bool,
+    /// This finger detects with this calibration (POST /v1/tactile/calibrations), whatever
+    /// the session's detector: fingers that carry different sensors, or one calibration each.
+    #[serde(default)]
+    pub calibration: Option<String>,
 }
 
 /// `{"model_free": {thresholds…}}`, `{"model": "name"}` or `{"calibration": "name"}`.
@@ -212,6 +216,7 @@ impl AnalyzeCsvQuery {
                     electrode_polarity: self.electrode_polarity,
                 }),
                 electrodes_only: self.electrodes_only,
+                calibration: None,
             }],
             window_length: self.window_length,
             stride: self.stride,
@@ -266,6 +271,7 @@ pub fn tactile_session_from_json(s: TactileSessionJson) -> TactileSessionRequest
                 },
                 tare: tare_from_json(f.tare),
                 electrodes_only: f.electrodes_only,
+                calibration: f.calibration,
             })
             .collect(),
         config: StabilizerConfig {

@@ -19,6 +19,8 @@ pub struct TactileFingerRequest {
     pub tare: TareConfig,
     /// The sensor gives only its electrodes (`FingerConfig::electrodes_only`).
     pub electrodes_only: bool,
+    /// The calibration this finger detects with, whatever the session's detector.
+    pub calibration: Option<String>,
 }
 
 /// A session request in domain terms, as both transports produce it: `config` holds every

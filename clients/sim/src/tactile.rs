@@ -358,6 +358,7 @@ pub fn run_disturbance_trial(
                 ..Default::default()
             }),
             electrodes_only: dist.electrodes_only,
+            calibration: None,
         };
         Some(
             service.stabilize(pb::TactileSession {

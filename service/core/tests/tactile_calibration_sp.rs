@@ -126,8 +126,14 @@ fn finger(tare: TareConfig) -> FingerConfig {
 }
 
 fn session(c: &Arc<Calibration>, fingers: usize) -> Stabilizer {
+    session_of(&vec![c.clone(); fingers])
+}
+
+/// A session whose finger k detects with `calibrations[k]` (as `fingers[k].calibration` asks).
+fn session_of(calibrations: &[Arc<Calibration>]) -> Stabilizer {
+    let c = &calibrations[0];
     let mut config = StabilizerConfig::for_fingers(
-        (0..fingers)
+        (0..calibrations.len())
             .map(|k| FingerConfig {
                 name: format!("f{k}"),
                 ..finger(c.settings.tare)
@@ -135,8 +141,9 @@ fn session(c: &Arc<Calibration>, fingers: usize) -> Stabilizer {
             .collect(),
     );
     (config.window_length, config.stride) = (c.settings.window_length, c.settings.stride);
-    let detectors = (0..fingers)
-        .map(|_| {
+    let detectors = calibrations
+        .iter()
+        .map(|c| {
             Box::new(CalibratedDetector::new(
                 c.clone(),
                 ModelFreeThresholds::default(),
@@ -193,10 +200,9 @@ fn a_calibration_tells_stable_grasps_from_slipping_ones() {
         tare: TareConfig::pretared(),
         electrodes_only: true,
     };
-    let (mut right, mut per_finger, mut fit_ms) = (0, [0usize; 3], 0.0);
-    for k in 0..5 {
-        let recordings: Vec<CalibrationRecording> = g
-            .iter()
+    // The training grasps' snapshots of the fingers in `which` as recordings.
+    let recordings = |k: usize, which: &[usize]| -> Vec<CalibrationRecording> {
+        g.iter()
             .filter(|x| fold[&x.object] != k)
             .flat_map(|x| {
                 let event = if x.slipped {
@@ -204,41 +210,56 @@ fn a_calibration_tells_stable_grasps_from_slipping_ones() {
                 } else {
                     ContactEvent::Contact
                 };
-                x.fingers.iter().map(move |e| CalibrationRecording {
+                which.iter().map(move |&f| CalibrationRecording {
                     material: None,
                     readings: vec![FingerReading {
-                        electrodes: e.clone(),
+                        electrodes: x.fingers[f].clone(),
                         ..FingerReading::default()
                     }],
                     events: Some(vec![event]),
                     slip_direction: None,
                 })
             })
-            .collect();
-        let c = Arc::new(Calibration::fit("grasps", &recordings, settings).unwrap());
+            .collect()
+    };
+    // Right answers: the grasp by the fingers' log-odds added (one calibration for the
+    // sensor; one per finger), each finger alone (one calibration for the sensor).
+    let (mut right, mut right_own, mut per_finger, mut fit_ms) = (0, 0, [0usize; 3], 0.0);
+    let fit = |recs: &[CalibrationRecording]| {
+        Arc::new(Calibration::fit("grasps", recs, settings).unwrap())
+    };
+    for k in 0..5 {
+        let c = fit(&recordings(k, &[0, 1, 2]));
         fit_ms += c.summary.fit_ms;
+        let own: Vec<Arc<Calibration>> = (0..3).map(|f| fit(&recordings(k, &[f]))).collect();
         for x in g.iter().filter(|x| fold[&x.object] == k) {
-            let mut s = session(&c, 3);
-            let out = s
-                .step(&Frame {
-                    timestamp: 0.0,
-                    fingers: x
-                        .fingers
-                        .iter()
-                        .map(|e| FingerReading {
-                            electrodes: e.clone(),
-                            ..FingerReading::default()
-                        })
-                        .collect(),
-                })
-                .unwrap();
-            let mut log_odds = 0.0;
+            let frame = Frame {
+                timestamp: 0.0,
+                fingers: x
+                    .fingers
+                    .iter()
+                    .map(|e| FingerReading {
+                        electrodes: e.clone(),
+                        ..FingerReading::default()
+                    })
+                    .collect(),
+            };
+            let log_odds = |out: &graspd_core::tactile::FrameResult| -> f64 {
+                out.fingers
+                    .iter()
+                    .map(|r| {
+                        let [_, contact, slip] = r.event_probabilities;
+                        (slip.max(1e-12) / contact.max(1e-12)).ln()
+                    })
+                    .sum()
+            };
+            let out = session(&c, 3).step(&frame).unwrap();
             for (f, r) in out.fingers.iter().enumerate() {
-                let [_, contact, slip] = r.event_probabilities;
-                log_odds += (slip.max(1e-12) / contact.max(1e-12)).ln();
                 per_finger[f] += usize::from((r.event == ContactEvent::Slip) == x.slipped);
             }
-            right += usize::from((log_odds > 0.0) == x.slipped);
+            right += usize::from((log_odds(&out) > 0.0) == x.slipped);
+            let out = session_of(&own).step(&frame).unwrap();
+            right_own += usize::from((log_odds(&out) > 0.0) == x.slipped);
         }
     }
     let n = g.len();
@@ -257,6 +278,10 @@ fn a_calibration_tells_stable_grasps_from_slipping_ones() {
         pct(right, n)
     );
     eprintln!(
+        "| the same, one calibration per finger (`fingers[i].calibration`) | {:.1} % ({right_own}/{n}) |",
+        pct(right_own, n)
+    );
+    eprintln!(
         "| majority answer (stable) | {:.1} % |\nfitted five times in {:.0} ms in all",
         pct(majority, n),
         fit_ms
@@ -265,6 +290,7 @@ fn a_calibration_tells_stable_grasps_from_slipping_ones() {
         pct(right, n) >= 80.0 && right > majority + n / 4,
         "{right} of {n} grasps (majority {majority})"
     );
+    assert!(pct(right_own, n) >= 80.0, "{right_own} of {n} grasps");
 }
 
 /// Touch vs slip on the direction-of-slip set (module doc), each object left out in turn.

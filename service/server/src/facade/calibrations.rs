@@ -166,14 +166,40 @@ impl GraspService {
         Ok(())
     }
 
-    /// The calibration a session names, checked against the session: its window, stride,
-    /// and every finger's electrode count and taring (errors name the field).
+    /// The calibration a session names as its detector, checked against the session: its
+    /// window, stride, and the electrode count and taring of every finger that uses it (`uses`:
+    /// those without a calibration of their own; errors name the field).
     pub(super) fn session_calibration(
         &self,
         name: &str,
         config: &StabilizerConfig,
+        uses: &[bool],
     ) -> Result<Arc<Calibration>, ServiceError> {
-        let field = "session.detector.calibration";
+        self.fitting_calibration(name, config, uses, "session.detector.calibration")
+    }
+
+    /// The calibration finger `i` names for itself (`session.fingers[i].calibration`), checked
+    /// against that finger.
+    pub(super) fn finger_calibration(
+        &self,
+        name: &str,
+        config: &StabilizerConfig,
+        i: usize,
+    ) -> Result<Arc<Calibration>, ServiceError> {
+        let uses: Vec<bool> = (0..config.fingers.len()).map(|k| k == i).collect();
+        let field = format!("session.fingers[{i}].calibration");
+        self.fitting_calibration(name, config, &uses, &field)
+    }
+
+    /// A calibration by name (unknown: `field`), checked against the session's window and
+    /// the fingers that use it: electrodes only or not, electrode count, taring.
+    fn fitting_calibration(
+        &self,
+        name: &str,
+        config: &StabilizerConfig,
+        uses: &[bool],
+        field: &str,
+    ) -> Result<Arc<Calibration>, ServiceError> {
         let cal = {
             let c = self.calibrations();
             c.by_name
@@ -193,6 +219,9 @@ impl GraspService {
             .into());
         }
         for (i, f) in config.fingers.iter().enumerate() {
+            if !uses.get(i).copied().unwrap_or(true) {
+                continue;
+            }
             if f.electrodes_only != s.electrodes_only {
                 let reads = if s.electrodes_only {
                     "was fitted on electrodes only; the finger must be electrodes_only"

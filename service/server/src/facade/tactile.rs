@@ -96,8 +96,9 @@ impl GraspService {
         &self,
         request: TactileSessionRequest,
     ) -> Result<TactileSession, ServiceError> {
+        let own = finger_calibrations(&request);
         let config = self.tactile_config(request)?;
-        let detectors = self.detectors(&config)?;
+        let detectors = self.detectors(&config, &own)?;
         let stabilizer = Stabilizer::with_detectors(config, detectors)?;
         let slot = self.take_tactile_slot()?;
         Ok(TactileSession {
@@ -114,8 +115,9 @@ impl GraspService {
         request: TactileSessionRequest,
         frames: &[Frame],
     ) -> Result<Vec<FrameResult>, ServiceError> {
+        let own = finger_calibrations(&request);
         let config = self.tactile_config(request)?;
-        let detectors = self.detectors(&config)?;
+        let detectors = self.detectors(&config, &own)?;
         let _slot = self.take_tactile_slot()?;
         guarded("the stabilizer", || {
             graspd_core::tactile::analyze_with_detectors(config, detectors, frames)
@@ -123,12 +125,34 @@ impl GraspService {
         })
     }
 
-    /// One detector per finger for a validated config: `model`/`lstm` needs the loaded model
-    /// and a session that fits it, a calibration one that fits it (errors name the field); the
-    /// default takes the model when the session fits it, else the model-free detector.
+    /// One detector per finger for a validated config: a finger that names its own
+    /// calibration (`own[i]`) detects with it (it must fit the finger: errors name
+    /// `session.fingers[i].calibration`), the others with the session's detector.
     fn detectors(
         &self,
         config: &StabilizerConfig,
+        own: &[Option<String>],
+    ) -> Result<Vec<Box<dyn EventDetector>>, ServiceError> {
+        let shared: Vec<bool> = own.iter().map(Option::is_none).collect();
+        let mut detectors = self.session_detectors(config, &shared)?;
+        for (i, name) in own.iter().enumerate() {
+            if let Some(name) = name {
+                let cal = self.finger_calibration(name, config, i)?;
+                detectors[i] =
+                    Box::new(CalibratedDetector::new(cal, ModelFreeThresholds::default()));
+            }
+        }
+        Ok(detectors)
+    }
+
+    /// One detector per finger from the session's choice: `model`/`lstm` needs the loaded
+    /// model and a session that fits it, a calibration one that fits it (errors name the
+    /// field); the default takes the model when the session fits it, else the model-free
+    /// detector. Only the `shared` fingers (those without a calibration of their own) must fit.
+    fn session_detectors(
+        &self,
+        config: &StabilizerConfig,
+        shared: &[bool],
     ) -> Result<Vec<Box<dyn EventDetector>>, ServiceError> {
         let model_free = |t: ModelFreeThresholds| -> Vec<Box<dyn EventDetector>> {
             config
@@ -150,7 +174,7 @@ impl GraspService {
         let model = self.inner.tactile_model.as_ref();
         match &config.detector {
             DetectorChoice::Calibration(name) => {
-                let cal = self.session_calibration(name, config)?;
+                let cal = self.session_calibration(name, config, shared)?;
                 Ok(config
                     .fingers
                     .iter()
@@ -164,7 +188,7 @@ impl GraspService {
             }
             DetectorChoice::ModelFree(t) => Ok(model_free(*t)),
             DetectorChoice::Default => Ok(match model {
-                Some(m) if tactile_fit(config, m).is_ok() => with_model(m),
+                Some(m) if tactile_fit(config, m, shared).is_ok() => with_model(m),
                 _ => model_free(ModelFreeThresholds::default()),
             }),
             DetectorChoice::Model(name) => {
@@ -186,7 +210,7 @@ impl GraspService {
                          --tactile-model FILE, or use model_free)",
                     )
                 })?;
-                tactile_fit(config, m)?;
+                tactile_fit(config, m, shared)?;
                 Ok(with_model(m))
             }
         }
@@ -213,9 +237,13 @@ impl GraspService {
     }
 }
 
-/// Whether a session fits the tactile model: its window and stride, and every finger's
-/// electrode count.
-fn tactile_fit(config: &StabilizerConfig, m: &TactileModel) -> Result<(), FieldError> {
+/// Whether a session fits the tactile model: its window and stride, and the electrode count of
+/// every finger that uses it (`uses`).
+fn tactile_fit(
+    config: &StabilizerConfig,
+    m: &TactileModel,
+    uses: &[bool],
+) -> Result<(), FieldError> {
     if config.window_length != m.window_length() {
         return Err(FieldError::new(
             "session.window_length",
@@ -239,6 +267,9 @@ fn tactile_fit(config: &StabilizerConfig, m: &TactileModel) -> Result<(), FieldE
         ));
     }
     for (i, f) in config.fingers.iter().enumerate() {
+        if !uses.get(i).copied().unwrap_or(true) {
+            continue;
+        }
         if f.electrodes_only {
             return Err(FieldError::new(
                 format!("session.fingers[{i}].electrodes_only"),
@@ -262,6 +293,15 @@ fn tactile_fit(config: &StabilizerConfig, m: &TactileModel) -> Result<(), FieldE
     Ok(())
 }
 
+/// Each finger's own calibration, if it names one (before the request is consumed).
+fn finger_calibrations(request: &TactileSessionRequest) -> Vec<Option<String>> {
+    request
+        .fingers
+        .iter()
+        .map(|f| f.calibration.clone())
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -275,6 +315,7 @@ mod tests {
                 layout,
                 tare: TareConfig::pretared(),
                 electrodes_only: false,
+                calibration: None,
             }],
             config: StabilizerConfig::default(),
         }
