@@ -340,12 +340,7 @@ impl EventDetector for CalibratedDetector {
         }
         let x = self.features.of(window);
         if let Some(events) = &c.events {
-            let mut probs = [0.0; 3];
-            for (name, q) in events.class_probabilities(&x) {
-                if let Some(k) = ContactEvent::ALL.iter().position(|e| e.name() == name) {
-                    probs[k] = q;
-                }
-            }
+            let (_, mut probs) = ranked(events, &x, ContactEvent::ALL, ContactEvent::name);
             // Recordings that hold no full window out of contact (a slide starts touching)
             // teach contact against slip only: whether the finger touches at all is then the
             // model-free detector's, the calibration's split applied to the rest.
@@ -364,16 +359,8 @@ impl EventDetector for CalibratedDetector {
             d.event_probabilities = probs;
         }
         if let Some(material) = &c.material {
-            let mut probs = [0.0; 4];
-            for (name, q) in material.class_probabilities(&x) {
-                if let Some(k) = Material::CLASSES.iter().position(|m| m.name() == name) {
-                    probs[k] = q;
-                }
-            }
-            let best = (0..4)
-                .max_by(|&a, &b| probs[a].total_cmp(&probs[b]))
-                .unwrap_or(0);
-            d.material = Material::CLASSES[best];
+            let (best, probs) = ranked(material, &x, Material::CLASSES, Material::name);
+            d.material = best;
             d.material_probabilities = Some(probs);
         }
         // The direction a slip would take, whenever in contact: the session reports it only
@@ -382,19 +369,35 @@ impl EventDetector for CalibratedDetector {
         if let Some(directions) = &c.slip_direction
             && d.event != ContactEvent::NonContact
         {
-            let mut probs = [0.0; 6];
-            for (name, q) in directions.class_probabilities(&x) {
-                if let Some(k) = SlipDirection::ALL.iter().position(|s| s.name() == name) {
-                    probs[k] = q;
-                }
-            }
-            let best = (0..6)
-                .max_by(|&a, &b| probs[a].total_cmp(&probs[b]))
-                .unwrap_or(0);
-            d.slip_direction = Some((SlipDirection::ALL[best], probs));
+            d.slip_direction = Some(ranked(
+                directions,
+                &x,
+                SlipDirection::ALL,
+                SlipDirection::name,
+            ));
         }
         d
     }
+}
+
+/// A classifier's probabilities laid out over a fixed set of answers (by name; an answer it was
+/// not fitted on has 0), and the most probable.
+fn ranked<T: Copy, const N: usize>(
+    classifier: &LinearDiscriminant,
+    x: &[f64],
+    answers: [T; N],
+    name: fn(T) -> &'static str,
+) -> (T, [f64; N]) {
+    let mut probs = [0.0; N];
+    for (label, q) in classifier.class_probabilities(x) {
+        if let Some(k) = answers.iter().position(|&a| name(a) == label) {
+            probs[k] = q;
+        }
+    }
+    let best = (0..N)
+        .max_by(|&a, &b| probs[a].total_cmp(&probs[b]))
+        .unwrap_or(0);
+    (answers[best], probs)
 }
 
 #[cfg(test)]
