@@ -42,7 +42,8 @@ pub struct CalibrateArgs {
     /// The calibration's name (sessions name it as their detector).
     #[arg(long)]
     name: String,
-    /// folder,material lines [DIR/labels.csv when present, else the folder names].
+    /// folder,material[,event[,slip direction]] lines [DIR/labels.csv when present, else the
+    /// folder names as materials].
     #[arg(long, value_name = "FILE")]
     labels: Option<PathBuf>,
     /// Replace a calibration of this name.

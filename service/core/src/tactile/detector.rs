@@ -53,6 +53,11 @@ impl ContactEvent {
             Self::Slip => "slip",
         }
     }
+
+    /// An event by its name (surrounding space ignored).
+    pub fn parse(text: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|e| e.name() == text.trim())
+    }
 }
 
 /// The material c^m (Eq 6.4); `Unknown` while not in contact or when no model says.

@@ -314,20 +314,15 @@ fn parse_recording(
                 "give the recording's event or the arm's files (cw_csv, cv_csv), not both",
             ));
         }
-        Some(name) => Some(
-            ContactEvent::ALL
-                .into_iter()
-                .find(|e| e.name() == name.trim())
-                .ok_or_else(|| {
-                    FieldError::new(
-                        format!("{field}.event"),
-                        format!(
-                            "unknown event '{}': one of non_contact, contact, slip",
-                            name.escape_debug()
-                        ),
-                    )
-                })?,
-        ),
+        Some(name) => Some(ContactEvent::parse(name).ok_or_else(|| {
+            FieldError::new(
+                format!("{field}.event"),
+                format!(
+                    "unknown event '{}': one of non_contact, contact, slip",
+                    name.escape_debug()
+                ),
+            )
+        })?),
     };
     let slip_direction = r
         .slip_direction
