@@ -176,6 +176,76 @@ fn urdf_tree_forward_kinematics_and_description() {
     assert_eq!(hand.tree.joints[2].limits(), (-PI, PI));
 }
 
+/// Actuator force limits become each joint's `effort` with MuJoCo's semantics: `forcerange`
+/// from the element or its default class, × `gear`; through a fixed tendon × the joint's
+/// coefficient; a joint's own `actuatorfrcrange` caps its actuators; `forcelimited="false"`
+/// and an unactuated joint leave it unlimited (None). A URDF joint's `<limit effort>` is its.
+#[test]
+fn actuator_force_limits_are_each_joints_effort() {
+    let xml = r#"<mujoco>
+  <default>
+    <position forcerange="-1 1"/>
+    <default class="strong"><position forcerange="-3 2" gear="2"/></default>
+  </default>
+  <worldbody><body name="palm">
+    <body name="a" pos="0 0 0.05"><joint name="ja" axis="0 1 0" range="0 1"/><geom size="0.01"/>
+      <body name="b" pos="0 0 0.04"><joint name="jb" axis="0 1 0" range="0 1"/><geom size="0.01"/>
+        <body name="c" pos="0 0 0.03"><joint name="jc" axis="0 1 0" range="0 1"/><geom size="0.01"/></body>
+      </body>
+    </body>
+    <body name="d" pos="0.03 0 0.05">
+      <joint name="jd" axis="0 1 0" range="0 1" actuatorfrcrange="-0.5 0.5"/><geom size="0.01"/>
+    </body>
+    <body name="e" pos="-0.03 0 0.05"><joint name="je" axis="0 1 0" range="0 1"/><geom size="0.01"/></body>
+    <body name="f" pos="-0.06 0 0.05"><joint name="jf" axis="0 1 0" range="0 1"/><geom size="0.01"/></body>
+  </body></worldbody>
+  <tendon><fixed name="t"><joint joint="jb" coef="1"/><joint joint="jc" coef="-0.5"/></fixed></tendon>
+  <actuator>
+    <position joint="ja" class="strong"/>
+    <position tendon="t"/>
+    <position joint="jd" forcerange="-4 4"/>
+    <motor joint="je" forcelimited="false" forcerange="-1 1"/>
+  </actuator>
+</mujoco>"#;
+    let tree = mjcf::parse_mjcf(xml, Path::new("."), "test.xml").unwrap();
+    let efforts: Vec<Option<f64>> = tree.joints.iter().map(|j| j.effort).collect();
+    assert_eq!(
+        efforts,
+        [Some(6.0), Some(1.0), Some(0.5), Some(0.5), None, None]
+    );
+    // Two actuators on one joint add their limits.
+    let twice = xml.replace(
+        r#"<position joint="jd" forcerange="-4 4"/>"#,
+        r#"<position joint="jf" forcerange="-4 4"/><motor joint="jf" forcerange="-1 1"/>"#,
+    );
+    let tree = mjcf::parse_mjcf(&twice, Path::new("."), "test.xml").unwrap();
+    assert_eq!(tree.joints[5].effort, Some(5.0));
+    // Bad input names what is wrong.
+    let e = mjcf_err(&xml.replace(r#"<position joint="ja""#, r#"<position joint="nope""#));
+    assert!(
+        e.message.contains("joint 'nope' is not in the model"),
+        "{e}"
+    );
+    let e = mjcf_err(&xml.replace(
+        r#"joint="jd" forcerange="-4 4""#,
+        r#"joint="jd" forcerange="4 -4""#,
+    ));
+    assert!(e.message.contains("forcerange must be low high"), "{e}");
+    let e = mjcf_err(&xml.replace(
+        r#"forcelimited="false" forcerange="-1 1""#,
+        r#"forcelimited="true""#,
+    ));
+    assert!(
+        e.message.contains("forcelimited without a forcerange"),
+        "{e}"
+    );
+    // URDF: `effort` on the limit; none given, or 0, is no limit.
+    let urdf = URDF_TRI.replacen(r#"upper="1.5"/>"#, r#"upper="1.5" effort="2.5"/>"#, 1);
+    let tree = urdf::parse_urdf(&urdf, Path::new("."), "tri.urdf").unwrap();
+    let efforts: Vec<Option<f64>> = tree.joints.iter().map(|j| j.effort).collect();
+    assert_eq!(efforts, [Some(2.5), None, None]);
+}
+
 fn mjcf_err(xml: &str) -> FieldError {
     mjcf::parse_mjcf(xml, Path::new("."), "test.xml").unwrap_err()
 }

@@ -144,6 +144,36 @@ const SHARED_HANDS: [(&str, usize); 4] = [
     ("barrett/wam_barrett_gripper.xml", 3),
 ];
 
+/// The servos' torque limits come from each shared MJCF's actuators (`Joint::effort`, read by
+/// hand from the files): the Shadow's finger servos 1 N·m (the class default), its thumb base
+/// 3 and proximal 2, its coupled middle and distal joints 1 each through their fixed tendon
+/// (coefficients 1); the Barrett's 3 N·m (`forcelimited`); the Allegro's unlimited (`kp` only).
+#[test]
+fn servo_torque_limits_are_read_from_the_actuators() {
+    let effort = |file: &str, joint: &str| {
+        let t = load(file);
+        t.joints[t.joint_index(joint).unwrap()].effort
+    };
+    let shadow = "shadow_hand/right_hand.xml";
+    for (joint, limit) in [
+        ("rh_FFJ3", 1.0),
+        ("rh_FFJ2", 1.0),
+        ("rh_FFJ1", 1.0),
+        ("rh_LFJ5", 1.0),
+        ("rh_THJ5", 3.0),
+        ("rh_THJ4", 2.0),
+        ("rh_THJ1", 1.0),
+        ("rh_WRJ2", 10.0),
+    ] {
+        assert_eq!(effort(shadow, joint), Some(limit), "{joint}");
+    }
+    let barrett = "barrett/wam_barrett_gripper.xml";
+    assert_eq!(effort(barrett, "wam/bhand/thumb/med_joint"), Some(3.0));
+    assert_eq!(effort(barrett, "wam/bhand/index/dist_joint"), Some(3.0));
+    let allegro = load("wonik_allegro/right_hand.xml");
+    assert!(allegro.joints.iter().all(|j| j.effort.is_none()));
+}
+
 fn hand(file: &str) -> KinematicHand {
     let path = hands_dir().join(file);
     KinematicHand::from_mjcf_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))

@@ -232,7 +232,8 @@ fn proposals_clear_the_plane_and_come_ranked() {
 /// contacts, so its firmest contact may go further; less when a contact would slide further
 /// than the depth and the squeeze is scaled back), every finger that flexes against the object presses inward (the
 /// balanced grip gives each finger its share of the force, so a stiff finger with a short lever
-/// moves little: `planning/grip_forces.rs`), none lifts off by more than half the depth or
+/// moves little: `planning/grip_forces.rs`; a finger of force-limited servos presses the whole
+/// depth, `squeeze.rs` `force_limited_floor`), none lifts off by more than half the depth or
 /// slides across the surface further than the depth, no flexion joint opens, and the squeezed
 /// hand stays out of the table.
 #[test]
@@ -304,6 +305,22 @@ fn the_squeeze_presses_contacts_by_the_set_depth_and_not_the_table() {
                     && firmest <= 1.35 * depth,
                 "{file}: the squeeze presses {firmest} m at most, not {depth}"
             );
+            // A finger whose flexion servos are all force-limited presses its firmest contact
+            // the whole depth, whatever its balanced share (the Barrett's, at its 3 N·m
+            // limits; the Shadow's squeeze here is held back by the slide limit, the
+            // Allegro's servos are unlimited).
+            for (finger, moved) in &per_finger {
+                let f = m.hand.finger_index(finger).unwrap();
+                let limited = m.synergy.fingers[f]
+                    .flexion
+                    .iter()
+                    .all(|fj| m.hand.tree.joints[fj.joint].effort.is_some());
+                let most = moved.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                assert!(
+                    !limited || held_back || most >= 0.75 * depth,
+                    "{file} {finger}: a force-limited finger presses only {most} m"
+                );
+            }
             for (finger, moved) in &per_finger {
                 // Every flexing finger presses; none of its contacts moves out.
                 let most = moved.iter().copied().fold(f64::NEG_INFINITY, f64::max);

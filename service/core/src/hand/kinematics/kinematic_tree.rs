@@ -41,6 +41,11 @@ pub struct Joint {
     pub range: Option<(f64, f64)>,
     /// The joint value at which the body sits at its modelled pose (MJCF `ref`, else 0).
     pub reference: f64,
+    /// The most torque (N·m; force, N, for a slide) its actuators can apply, when they are
+    /// force-limited: MJCF actuator `forcerange` × gear (through a fixed tendon × the joint's
+    /// coefficient) or the joint's `actuatorfrcrange`, URDF `<limit effort>`. None when the
+    /// model sets no limit or drives the joint with no actuator.
+    pub effort: Option<f64>,
 }
 
 impl Joint {

@@ -69,6 +69,7 @@ pub fn parse_urdf(text: &str, mesh_dir: &Path, source: &str) -> Result<Kinematic
         kind: Option<JointKind>,
         axis: Unit<Vector3<f64>>,
         range: Option<(f64, f64)>,
+        effort: Option<f64>,
     }
     let mut joints: Vec<UrdfJoint> = Vec::new();
     let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
@@ -158,7 +159,7 @@ pub fn parse_urdf(text: &str, mesh_dir: &Path, source: &str) -> Result<Kinematic
             }
             None => Vector3::x_axis(),
         };
-        let range = if matches!(j.attr("type"), Some("revolute") | Some("prismatic")) {
+        let (range, effort) = if matches!(j.attr("type"), Some("revolute") | Some("prismatic")) {
             let l = j.children_named("limit").next().ok_or_else(|| {
                 FieldError::new(
                     format!("{jf}.limit"),
@@ -180,9 +181,15 @@ pub fn parse_urdf(text: &str, mesh_dir: &Path, source: &str) -> Result<Kinematic
                     }),
                 }
             };
-            Some((num("lower")?, num("upper")?))
+            // A servo's torque limit: `effort` (required by the URDF spec; 0 or absent reads as
+            // none given).
+            let effort = num("effort")?.abs();
+            (
+                Some((num("lower")?, num("upper")?)),
+                (effort > 0.0 && effort.is_finite()).then_some(effort),
+            )
         } else {
-            None
+            (None, None)
         };
         parent_joint[child] = Some(joints.len());
         joints.push(UrdfJoint {
@@ -193,6 +200,7 @@ pub fn parse_urdf(text: &str, mesh_dir: &Path, source: &str) -> Result<Kinematic
             kind,
             axis,
             range,
+            effort,
         });
     }
     let roots: Vec<usize> = (0..links.len())
@@ -296,6 +304,7 @@ pub fn parse_urdf(text: &str, mesh_dir: &Path, source: &str) -> Result<Kinematic
             axis: j.axis,
             range: j.range,
             reference: 0.0,
+            effort: j.effort,
         });
         tree.bodies[body].joints.push(index);
     }

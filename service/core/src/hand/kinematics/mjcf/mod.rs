@@ -14,10 +14,14 @@
 //! - `<mesh file scale>` assets: every mesh file must exist; collision meshes are loaded;
 //! - `<equality><connect|weld body1 body2>` as loop closures.
 //!
-//! Inertial, actuator, tendon, sensor and contact sections are not kinematics and are ignored.
+//! - the force limits of the actuators (and of fixed tendons' joints) as each joint's
+//!   `effort` ([`actuators`]).
+//!
+//! Inertial, sensor and contact sections are not kinematics and are ignored.
 //! How an element's attributes are read (compiler settings, default classes, mesh assets):
 //! [`attributes`].
 
+mod actuators;
 mod attributes;
 
 use super::kinematic_tree::{
@@ -99,6 +103,7 @@ pub fn parse_mjcf(text: &str, model_dir: &Path, source: &str) -> Result<Kinemati
             reader.equality(c)?;
         }
     }
+    actuators::read_actuator_limits(&root, &reader.defaults, &reader.compiler, &mut reader.tree)?;
     reader.tree.validate(FIELD)?;
     Ok(reader.tree)
 }
@@ -419,6 +424,7 @@ impl Reader {
             axis,
             range: if limited { range } else { None },
             reference,
+            effort: actuators::joint_limit(&a, &self.compiler)?,
         });
         self.tree.bodies[body].joints.push(index);
         Ok(())
