@@ -421,15 +421,16 @@ fn unlimited_squeeze(
 /// `depth` (by up to [`FLOOR_GAIN`] times its share); others keep their share (1).
 ///
 /// The balanced grip gives a finger opposite several others a share of a few millimetres (the
-/// Shadow's thumb across a sugar box: 2 mm, the ring and little fingers 0), less than the single
-/// view's error in the surface it lands on (2–9 mm measured), so in MuJoCo such a finger
-/// pressed nothing: 2.6 N of grip on the 5 N box, the index alone pushing it over. A
+/// Shadow's thumb across a sugar box: 2 mm), less than the single view's error in the surface
+/// it lands on (2–9 mm measured), so in MuJoCo such a finger pressed nothing: 2.6 N of grip on
+/// the 5 N box, the index alone pushing it over. (A finger all of whose joints the grip holds
+/// at their touch has no share to raise and stays.) A
 /// force-limited servo pushes at most its limit however far its target lies past the touch, so
 /// the whole depth engages the finger without outpushing the others beyond their limits; a
 /// servo without a limit (the Menagerie Allegro's) pushes in proportion to its travel and keeps
 /// its balanced share. Measured (all 13 objects, 20 trials, paired): Shadow 220 → 230 of 260,
 /// Barrett 255 → 255; applied to the Allegro's unlimited servos too it lost 236 → 214 (flat
-/// boxes pushed 2–7 cm in the close).
+/// boxes pushed 1–7 cm in the close).
 ///
 /// [`Joint::effort`]: crate::hand::kinematics::Joint
 fn force_limited_floor(

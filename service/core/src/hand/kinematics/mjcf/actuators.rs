@@ -16,8 +16,8 @@ use super::err;
 use crate::error::FieldError;
 use std::collections::HashMap;
 
-/// The largest force `attrs` allows through `range_key` (`forcerange`, `actuatorfrcrange`)
-/// when `limited_key` makes it a limit: Some(None) when unlimited, Some(Some(f)) when limited.
+/// The largest force `a` allows through `range_key` (`forcerange`, `actuatorfrcrange`) when
+/// `limited_key` makes it a limit; None when unlimited.
 fn force_limit(
     a: &Attrs,
     compiler: &Compiler,
