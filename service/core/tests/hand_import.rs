@@ -177,15 +177,16 @@ fn urdf_tree_forward_kinematics_and_description() {
 }
 
 /// Actuator force limits become each joint's `effort` with MuJoCo's semantics: `forcerange`
-/// from the element or its default class, × `gear`; through a fixed tendon × the joint's
-/// coefficient; a joint's own `actuatorfrcrange` caps its actuators; `forcelimited="false"`
-/// and an unactuated joint leave it unlimited (None). A URDF joint's `<limit effort>` is its.
+/// from the element or its default class, × `gear` (its first of up to six numbers); through
+/// a fixed tendon × the joint's coefficient; a joint's own `actuatorfrcrange` caps its
+/// actuators; `forcelimited="false"` and an unactuated joint leave it unlimited (None). A URDF
+/// joint's `<limit effort>` is its.
 #[test]
 fn actuator_force_limits_are_each_joints_effort() {
     let xml = r#"<mujoco>
   <default>
     <position forcerange="-1 1"/>
-    <default class="strong"><position forcerange="-3 2" gear="2"/></default>
+    <default class="strong"><position forcerange="-3 2" gear="2 0 0 0 0 0"/></default>
   </default>
   <worldbody><body name="palm">
     <body name="a" pos="0 0 0.05"><joint name="ja" axis="0 1 0" range="0 1"/><geom size="0.01"/>

@@ -10,7 +10,7 @@
 //! are skipped.
 
 use super::super::kinematic_tree::KinematicTree;
-use super::super::xml::Element;
+use super::super::xml::{self, Element};
 use super::attributes::{Attrs, Compiler, Defaults, parse_bool, resolve};
 use super::err;
 use crate::error::FieldError;
@@ -85,7 +85,13 @@ pub(super) fn read_actuator_limits(
                     },
                     _ => continue,
                 };
-            let gear = a.numbers("gear", 1)?.map_or(1.0, |v| v[0]).abs();
+            // `gear` is up to six numbers; a joint or tendon transmission uses the first.
+            let gear = match a.get("gear") {
+                None => 1.0,
+                Some(g) => xml::numbers_up_to(g, 6)
+                    .ok_or_else(|| err(c, format!("gear='{g}' must be 1 to 6 finite numbers")))?[0]
+                    .abs(),
+            };
             let limit = force_limit(&a, compiler, "forcerange", "forcelimited")?;
             for (joint, coef) in driven {
                 let j = tree
