@@ -65,30 +65,36 @@ fn listing(dir: &std::path::Path) -> Vec<String> {
     v
 }
 
-/// The materials a REST analyze of `bio` with the calibration reports, over frames in contact.
-async fn analyze_materials(server: &Server, calibration: &str, bio: &str) -> Vec<String> {
+/// A REST analyze (multipart) of the recording `bio` with `session`: the response body, after
+/// checking it is 200.
+async fn analyze_csv(
+    server: &Server,
+    bio: String,
+    session: serde_json::Value,
+) -> serde_json::Value {
+    let form = reqwest::multipart::Form::new()
+        .part(
+            "bio_csv",
+            reqwest::multipart::Part::text(bio).file_name("held_out_bio.csv"),
+        )
+        .text("session", session.to_string());
     let response = http()
         .post(server.rest_url("/v1/tactile/analyze"))
-        .multipart(
-            reqwest::multipart::Form::new()
-                .part(
-                    "bio_csv",
-                    reqwest::multipart::Part::text(bio.to_string()).file_name("held_out_bio.csv"),
-                )
-                .text(
-                    "session",
-                    json!({
-                        "fingers": [{"name": "ff", "layout": "biotac", "tare": {"pretared": true}}],
-                        "detector": {"calibration": calibration},
-                    })
-                    .to_string(),
-                ),
-        )
+        .multipart(form)
         .send()
         .await
         .unwrap();
     assert_eq!(response.status(), 200);
-    let body: serde_json::Value = response.json().await.unwrap();
+    response.json().await.unwrap()
+}
+
+/// The materials a REST analyze of `bio` with the calibration reports, over frames in contact.
+async fn analyze_materials(server: &Server, calibration: &str, bio: &str) -> Vec<String> {
+    let session = json!({
+        "fingers": [{"name": "ff", "layout": "biotac", "tare": {"pretared": true}}],
+        "detector": {"calibration": calibration},
+    });
+    let body = analyze_csv(server, bio.to_string(), session).await;
     body["frames"]
         .as_array()
         .unwrap()
@@ -419,20 +425,7 @@ async fn an_electrodes_only_calibration_tells_slides_from_touches() {
                 "fingers": [{"name": "ff", "layout": "biotac_sp", "electrodes_only": true}],
                 "detector": {"calibration": "sp"},
             });
-            let form = reqwest::multipart::Form::new()
-                .part(
-                    "bio_csv",
-                    reqwest::multipart::Part::text(csv).file_name("pen.csv"),
-                )
-                .text("session", session.to_string());
-            let response = http()
-                .post(server.rest_url("/v1/tactile/analyze"))
-                .multipart(form)
-                .send()
-                .await
-                .unwrap();
-            assert_eq!(response.status(), 200);
-            let body: serde_json::Value = response.json().await.unwrap();
+            let body = analyze_csv(server, csv, session).await;
             let frames = body["frames"].as_array().unwrap();
             let slip = frames
                 .iter()
@@ -452,24 +445,8 @@ async fn an_electrodes_only_calibration_tells_slides_from_touches() {
     };
     // The same calibration named by the finger itself, the session's detector left to its
     // default: only a calibration names a direction.
-    let form = reqwest::multipart::Form::new()
-        .part(
-            "bio_csv",
-            reqwest::multipart::Part::text(dos("n", "pen", 1)).file_name("pen.csv"),
-        )
-        .text(
-            "session",
-            json!({"fingers": [{"name": "ff", "layout": "biotac_sp", "electrodes_only": true, "calibration": "sp"}]})
-                .to_string(),
-        );
-    let response = http()
-        .post(server.rest_url("/v1/tactile/analyze"))
-        .multipart(form)
-        .send()
-        .await
-        .unwrap();
-    assert_eq!(response.status(), 200);
-    let body: serde_json::Value = response.json().await.unwrap();
+    let session = json!({"fingers": [{"name": "ff", "layout": "biotac_sp", "electrodes_only": true, "calibration": "sp"}]});
+    let body = analyze_csv(&server, dos("n", "pen", 1), session).await;
     let named = body["frames"]
         .as_array()
         .unwrap()
