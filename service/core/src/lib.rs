@@ -11,6 +11,7 @@ pub mod perception;
 pub mod plan_overlay;
 pub mod plan_scene;
 pub mod planning;
+pub mod reaching;
 pub mod tactile;
 
 pub use error::{FieldError, PlanError};
