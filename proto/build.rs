@@ -4,11 +4,12 @@
 use prost::Message;
 use std::path::PathBuf;
 
-const PROTOS: [&str; 6] = [
+const PROTOS: [&str; 7] = [
     "graspd/v1/common.proto",
     "graspd/v1/hand.proto",
     "graspd/v1/ros.proto",
     "graspd/v1/plan.proto",
+    "graspd/v1/reach.proto",
     "graspd/v1/grasp_planner.proto",
     "graspd/v1/tactile_stabilizer.proto",
 ];

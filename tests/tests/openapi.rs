@@ -10,6 +10,7 @@ use std::collections::BTreeSet;
 /// document: the test compares this list, the router's source and the document both ways.
 const ROUTES: &[(&str, &str)] = &[
     ("POST", "/v1/plan"),
+    ("POST", "/v1/reach"),
     ("GET", "/v1/hands"),
     ("POST", "/v1/hands"),
     ("GET", "/v1/hands/{name}"),

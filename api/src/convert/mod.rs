@@ -1,6 +1,6 @@
 //! proto ↔ domain, one file per message family: [`values`] (vectors, points, poses, planes,
 //! enums and the API names of sources), [`hands`] (descriptions and registrations), [`plan`]
-//! (PlanGrasp requests and responses), [`perception`] (the perception report), [`ros`]
+//! (PlanGrasp requests and responses), [`reach`] (PlanReach), [`perception`] (the perception report), [`ros`]
 //! (PointCloud2 in, MoveIt grasps out), [`tactile`] (sessions, frames and setpoints of the
 //! Stabilize stream) and [`calibration`]. Decoding
 //! treats a message as untrusted: every error names the offending field by its proto path.
@@ -9,6 +9,7 @@ pub mod calibration;
 pub mod hands;
 pub mod perception;
 pub mod plan;
+pub mod reach;
 pub mod ros;
 pub mod tactile;
 pub mod values;
@@ -17,6 +18,7 @@ pub use calibration::*;
 pub use hands::*;
 pub use perception::*;
 pub use plan::*;
+pub use reach::*;
 pub use ros::*;
 pub use tactile::*;
 pub use values::*;

@@ -4,7 +4,7 @@
 //! is, and the DTOs here cover what differs: clouds (arrays or base64), positions as
 //! `{x, y, z}` (accepted as `[x, y, z]` too), poses and the response layout.
 //!
-//! One file per message family: [`values`], [`plan`], [`perception`], [`ros`], [`tactile`],
+//! One file per message family: [`values`], [`plan`], [`reach`], [`perception`], [`ros`], [`tactile`],
 //! [`calibration`], [`hands`];
 //! here the parser that names fields by their paths, and the error body.
 
@@ -12,6 +12,7 @@ mod calibration;
 mod hands;
 mod perception;
 mod plan;
+mod reach;
 mod ros;
 mod tactile;
 mod values;
@@ -20,6 +21,7 @@ pub use calibration::*;
 pub use hands::*;
 pub use perception::*;
 pub use plan::*;
+pub use reach::*;
 pub use ros::*;
 pub use tactile::*;
 pub use values::*;

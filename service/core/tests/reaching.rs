@@ -136,7 +136,7 @@ fn bad_reaches_are_refused_naming_the_field() {
         half_extents: Vector3::new(0.02, 3.0, 3.0),
         orientation: UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.38),
     };
-    assert_eq!(field(r), "scene.obstacles[0]");
+    assert_eq!(field(r), "obstacles[0]");
     let mut r = request(Vec::new());
     r.approach = Vector3::zeros();
     assert_eq!(field(r), "approach");
@@ -148,5 +148,5 @@ fn bad_reaches_are_refused_naming_the_field() {
     assert_eq!(field(r), "options.time_step");
     let mut r = request(vec![blocking_box()]);
     r.scene.obstacles[0].half_extents.y = -1.0;
-    assert_eq!(field(r), "scene.obstacles[0].half_extents");
+    assert_eq!(field(r), "obstacles[0].half_extents");
 }

@@ -94,6 +94,19 @@ pub struct Trajectory {
     pub reach_error: f64,
 }
 
+/// Most obstacles a reach keeps clear of (each costs every MPC step).
+pub const MAX_OBSTACLES: usize = 64;
+/// Most demonstrations, and most samples in one.
+pub const MAX_DEMONSTRATIONS: usize = 16;
+pub const MAX_DEMONSTRATION_SAMPLES: usize = 10_000;
+/// Most model steps of a reach (`reach_duration / time_step`) and longest MPC horizon: with
+/// [`MAX_OBSTACLES`] they bound one request's CPU (about a second at the worst).
+pub const MAX_REACH_STEPS: usize = 2000;
+pub const MAX_HORIZON: usize = 100;
+/// Defaults of a request's optional fields: the approach's length (m) and the hand's radius (m).
+pub const DEFAULT_PREGRASP_DISTANCE: f64 = 0.1;
+pub const DEFAULT_HAND_RADIUS: f64 = 0.05;
+
 /// How far past `min_clearance` the obstacle penalty reaches, m.
 const SAFETY_MARGIN: f64 = 0.02;
 
@@ -218,7 +231,7 @@ pub fn plan_reach(req: &ReachRequest) -> Result<Trajectory, FieldError> {
         && c < o.min_clearance - 1e-6
     {
         return Err(FieldError::new(
-            format!("scene.obstacles[{i}]"),
+            format!("obstacles[{i}]"),
             format!(
                 "no reach found that keeps {:.0} mm from it (closest {:.1} mm): it blocks the \
                  way to the goal",
@@ -231,7 +244,7 @@ pub fn plan_reach(req: &ReachRequest) -> Result<Trajectory, FieldError> {
         && h < -1e-6
     {
         return Err(FieldError::new(
-            "goal",
+            "support_plane",
             format!(
                 "the reach passes {:.1} mm below the table on its way",
                 -h * 1e3
@@ -286,10 +299,48 @@ fn validate(req: &ReachRequest) -> Result<(), FieldError> {
     range(o.reach_duration, 0.1, 20.0, "reach_duration")?;
     range(o.approach_duration, 0.05, 10.0, "approach_duration")?;
     range(o.min_clearance, 0.0, 0.5, "min_clearance")?;
-    range(o.horizon as f64, 1.0, 500.0, "horizon")?;
-    range(req.scene.hand_radius, 0.0, 0.5, "scene.hand_radius")?;
+    range(o.horizon as f64, 1.0, MAX_HORIZON as f64, "horizon")?;
+    let steps = o.reach_duration / o.time_step;
+    if steps > MAX_REACH_STEPS as f64 + 0.5 {
+        return Err(FieldError::new(
+            "options.time_step",
+            format!(
+                "reach_duration / time_step = {steps:.0} steps, more than {MAX_REACH_STEPS}: \
+                 take a longer step"
+            ),
+        ));
+    }
+    range(req.scene.hand_radius, 0.0, 0.5, "hand_radius")?;
+    if req.scene.obstacles.len() > MAX_OBSTACLES {
+        return Err(FieldError::new(
+            "obstacles",
+            format!(
+                "{} obstacles, more than {MAX_OBSTACLES}",
+                req.scene.obstacles.len()
+            ),
+        ));
+    }
+    if req.demonstrations.len() > MAX_DEMONSTRATIONS {
+        return Err(FieldError::new(
+            "demonstrations",
+            format!(
+                "{} demonstrations, more than {MAX_DEMONSTRATIONS}",
+                req.demonstrations.len()
+            ),
+        ));
+    }
+    if let Some(i) = req
+        .demonstrations
+        .iter()
+        .position(|d| d.positions.len() > MAX_DEMONSTRATION_SAMPLES)
+    {
+        return Err(FieldError::new(
+            format!("demonstrations[{i}].positions"),
+            format!("more than {MAX_DEMONSTRATION_SAMPLES} samples"),
+        ));
+    }
     for (i, ob) in req.scene.obstacles.iter().enumerate() {
-        ob.validate(&format!("scene.obstacles[{i}]"))?;
+        ob.validate(&format!("obstacles[{i}]"))?;
     }
     let pre = req.goal.translation.vector - a.normalize() * req.pregrasp_distance;
     for (field, p) in [
@@ -308,10 +359,7 @@ fn validate(req: &ReachRequest) -> Result<(), FieldError> {
         {
             return Err(FieldError::new(
                 field,
-                format!(
-                    "{what} reaches {:.1} mm into scene.obstacles[{i}]",
-                    -c * 1e3
-                ),
+                format!("{what} reaches {:.1} mm into obstacles[{i}]", -c * 1e3),
             ));
         }
         if let Some(h) = req.scene.table_height(&at)

@@ -3,7 +3,7 @@
 //! tonic, axum, tokio or proto types), so it also serves as the library entry point.
 //!
 //! One file per concern: [`validate`] (the request rules the facade owns; the options' ranges
-//! are `PlannerOptions::validate`'s), [`plan`], [`hands`] (catalog and registration),
+//! are `PlannerOptions::validate`'s), [`plan`], [`reach`] (reaching trajectories), [`hands`] (catalog and registration),
 //! [`tactile`] (sessions and analysis), [`calibrations`] (tactile calibrations: fit, store,
 //! name). The requests and answers it takes and gives, its `Limits` (configured bounds, the CPU
 //! cap on options included) and its `ServiceError` are `graspd-api`'s, so that the clients
@@ -23,6 +23,7 @@ use std::sync::{Arc, RwLock};
 mod calibrations;
 mod hands;
 mod plan;
+mod reach;
 mod tactile;
 mod validate;
 

@@ -81,4 +81,18 @@ impl GraspPlanner for GraspPlannerService {
         tracing::info!(hand = %registered.description.name, persisted = registered.persisted, "hand registered");
         Ok(Response::new(convert::registered_to_proto(&registered)))
     }
+
+    async fn plan_reach(
+        &self,
+        request: Request<pb::PlanReachRequest>,
+    ) -> Result<Response<pb::PlanReachResponse>, Status> {
+        let request = convert::reach_request_from_proto(request.into_inner())
+            .map_err(|e| to_status(e.into()))?;
+        let (trajectory, ms) = self
+            .runner
+            .run_blocking("reach", Transport::Grpc, move |s| s.plan_reach(&request))
+            .await
+            .map_err(to_status)?;
+        Ok(Response::new(convert::trajectory_to_proto(&trajectory, ms)))
+    }
 }

@@ -22,6 +22,7 @@ pub const METHODS: &[&str] = &[
     "/graspd.v1.GraspPlanner/ListHands",
     "/graspd.v1.GraspPlanner/GetHand",
     "/graspd.v1.GraspPlanner/RegisterHand",
+    "/graspd.v1.GraspPlanner/PlanReach",
     "/graspd.v1.TactileStabilizer/Stabilize",
     "/graspd.v1.TactileStabilizer/Calibrate",
     "/graspd.v1.TactileStabilizer/ListCalibrations",

@@ -9,6 +9,7 @@ pub mod error;
 pub mod hands;
 pub mod openapi;
 pub mod plan;
+pub mod reach;
 pub mod stabilize;
 pub mod tactile;
 
@@ -52,6 +53,7 @@ pub fn router(runner: PlanRunner, ops: Ops) -> Router {
     let edge = EdgeLayer::new(EDGE_HOOKS, &ops);
     Router::new()
         .route("/v1/plan", post(plan::plan))
+        .route("/v1/reach", post(reach::reach))
         .route("/v1/hands", get(hands::list).post(hands::register))
         .route("/v1/hands/{name}", get(hands::get))
         .route("/v1/stabilize", get(stabilize::stabilize))

@@ -36,6 +36,7 @@ pub async fn openapi_json() -> Json<&'static Document> {
     ),
     paths(
         super::plan::plan,
+        super::reach::reach,
         super::hands::list,
         super::hands::get,
         super::hands::register,

@@ -1,0 +1,190 @@
+//! PlanReach over gRPC and POST /v1/reach against the real binary on loopback (issue 18 part 4):
+//! both transports give the same trajectory, round the same obstacle, ending on the grasp;
+//! bad requests are refused naming the field, and the server still answers after them.
+
+use graspd_e2e::{Server, assert_valid_plan_works, http, refused_naming};
+use graspd_proto::v1 as pb;
+use serde_json::json;
+use tonic::Code;
+
+fn v(x: f64, y: f64, z: f64) -> pb::Vec3 {
+    pb::Vec3 { x, y, z }
+}
+
+fn pose(p: pb::Vec3, q: (f64, f64, f64, f64)) -> pb::Pose {
+    pb::Pose {
+        position: Some(p),
+        orientation: Some(pb::Quaternion {
+            x: q.0,
+            y: q.1,
+            z: q.2,
+            w: q.3,
+        }),
+    }
+}
+
+/// From 40 cm above the table to a top grasp at (0.5, 0.2, 0.1), round a post in the way.
+fn grpc_request() -> pb::PlanReachRequest {
+    pb::PlanReachRequest {
+        start: Some(pose(v(0.0, 0.0, 0.4), (0.0, 0.0, 0.0, 1.0))),
+        goal: Some(pose(v(0.5, 0.2, 0.1), (1.0, 0.0, 0.0, 0.0))),
+        approach: Some(v(0.0, 0.0, -1.0)),
+        obstacles: vec![pb::Obstacle {
+            centre: Some(v(0.25, 0.1, 0.3)),
+            half_extents: Some(v(0.04, 0.04, 0.15)),
+            orientation: None,
+        }],
+        support_plane: Some(pb::Plane {
+            normal: Some(v(0.0, 0.0, 1.0)),
+            offset: 0.0,
+        }),
+        hand_radius: Some(0.04),
+        ..Default::default()
+    }
+}
+
+fn json_request() -> serde_json::Value {
+    json!({
+        "start": {"position": [0.0, 0.0, 0.4], "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
+        "goal": {"position": {"x": 0.5, "y": 0.2, "z": 0.1}, "orientation": {"x": 1.0, "y": 0.0, "z": 0.0, "w": 0.0}},
+        "approach": [0.0, 0.0, -1.0],
+        "obstacles": [{"centre": [0.25, 0.1, 0.3], "half_extents": [0.04, 0.04, 0.15]}],
+        "support_plane": {"normal": [0.0, 0.0, 1.0], "offset": 0.0},
+        "hand_radius": 0.04
+    })
+}
+
+#[tokio::test]
+async fn both_transports_plan_the_same_reach_round_the_obstacle() {
+    let server = Server::start();
+    let g = server
+        .grpc()
+        .await
+        .plan_reach(grpc_request())
+        .await
+        .unwrap()
+        .into_inner();
+    // 1.5 s of reach and 0.6 s of approach at 10 ms, and the start.
+    assert_eq!(g.samples.len(), 211);
+    let last = g.samples.last().unwrap();
+    let p = last.pose.as_ref().unwrap().position.as_ref().unwrap();
+    assert!((p.x - 0.5).abs() < 1e-9 && (p.y - 0.2).abs() < 1e-9 && (p.z - 0.1).abs() < 1e-9);
+    assert!((last.time - 2.1).abs() < 1e-9);
+    assert!(g.obstacle_clearance.unwrap() >= 0.01, "{g:?}");
+    assert_eq!(g.closest_obstacle, Some(0));
+    assert!(g.reach_error < 0.005);
+    assert!(g.table_clearance.unwrap() > 0.0);
+
+    let r: serde_json::Value = http()
+        .post(server.rest_url("/v1/reach"))
+        .json(&json_request())
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    let samples = r["samples"].as_array().unwrap();
+    assert_eq!(samples.len(), g.samples.len());
+    for (a, b) in samples.iter().zip(&g.samples) {
+        let p = b.pose.as_ref().unwrap().position.as_ref().unwrap();
+        let q = &a["pose"]["position"];
+        assert_eq!(
+            (q["x"].as_f64(), q["y"].as_f64(), q["z"].as_f64()),
+            (Some(p.x), Some(p.y), Some(p.z))
+        );
+        assert_eq!(a["time"].as_f64(), Some(b.time));
+    }
+    assert_eq!(r["obstacle_clearance"].as_f64(), g.obstacle_clearance);
+    assert_eq!(r["closest_obstacle"], 0);
+}
+
+/// A change that spoils a good request.
+type Edit = Box<dyn Fn(&mut pb::PlanReachRequest)>;
+
+#[tokio::test]
+async fn bad_reaches_are_refused_naming_the_field() {
+    let server = Server::start();
+    let mut grpc = server.grpc().await;
+    let cases: Vec<(&str, Edit)> = vec![
+        ("start", Box::new(|r| r.start = None)),
+        (
+            "goal.orientation",
+            Box::new(|r| r.goal.as_mut().unwrap().orientation = Some(pb::Quaternion::default())),
+        ),
+        (
+            "start",
+            Box::new(|r| r.obstacles[0].centre = Some(v(0.0, 0.0, 0.4))),
+        ),
+        (
+            "obstacles[0].half_extents",
+            Box::new(|r| r.obstacles[0].half_extents = Some(v(0.1, -0.1, 0.1))),
+        ),
+        (
+            "options.time_step",
+            Box::new(|r| {
+                r.options = Some(pb::ReachOptions {
+                    time_step: 0.0005,
+                    ..Default::default()
+                })
+            }),
+        ),
+        (
+            "support_plane",
+            Box::new(|r| r.support_plane.as_mut().unwrap().normal = Some(v(0.0, 0.0, 0.0))),
+        ),
+        (
+            "goal",
+            Box::new(|r| r.goal.as_mut().unwrap().position = Some(v(0.5, 0.2, -0.2))),
+        ),
+    ];
+    for (field, edit) in &cases {
+        let mut r = grpc_request();
+        edit(&mut r);
+        let e = grpc.plan_reach(r).await.unwrap_err();
+        assert_eq!(e.code(), Code::InvalidArgument, "{field}: {e:?}");
+        assert!(
+            e.message().starts_with(&format!("{field}: ")),
+            "{field}: {}",
+            e.message()
+        );
+    }
+    let mut body = json_request();
+    body["obstacles"][0]["centre"] = json!([0.5, 0.2, 0.1]);
+    refused_naming(
+        http()
+            .post(server.rest_url("/v1/reach"))
+            .json(&body)
+            .send()
+            .await
+            .unwrap(),
+        "goal",
+    )
+    .await;
+    let mut body = json_request();
+    body["options"] = json!({"horizon": 1000});
+    refused_naming(
+        http()
+            .post(server.rest_url("/v1/reach"))
+            .json(&body)
+            .send()
+            .await
+            .unwrap(),
+        "options.horizon",
+    )
+    .await;
+    let mut body = json_request();
+    body["hand_radius"] = json!("big");
+    refused_naming(
+        http()
+            .post(server.rest_url("/v1/reach"))
+            .json(&body)
+            .send()
+            .await
+            .unwrap(),
+        "hand_radius",
+    )
+    .await;
+    assert_valid_plan_works(&server).await;
+    assert!(grpc.plan_reach(grpc_request()).await.is_ok());
+}
