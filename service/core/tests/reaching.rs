@@ -150,3 +150,48 @@ fn bad_reaches_are_refused_naming_the_field() {
     r.scene.obstacles[0].half_extents.y = -1.0;
     assert_eq!(field(r), "obstacles[0].half_extents");
 }
+
+/// A user's demonstration shapes the reach: a straight one keeps the hand on the line from the
+/// start to the pre-grasp point, where the built-in one rises off it by a tenth of the reach
+/// (5.7 cm here); both end on the grasp.
+#[test]
+fn a_posted_demonstration_shapes_the_reach() {
+    use graspd_core::reaching::forcing_term::Demonstration;
+    let req = request(Vec::new());
+    let (a, b) = (
+        req.start.translation.vector,
+        Vector3::new(0.5, 0.2, 0.2), // the pre-grasp point
+    );
+    let off_line = |t: &graspd_core::reaching::Trajectory| {
+        t.samples[..151]
+            .iter()
+            .map(|s| {
+                let p = s.pose.translation.vector - a;
+                let d = (b - a).normalize();
+                (p - d * p.dot(&d)).norm()
+            })
+            .fold(0.0, f64::max)
+    };
+    let built_in = plan_reach(&req).unwrap();
+    let mut req = req;
+    // Sampled the way a recording is: 120 Hz, 0.8 s, a straight minimum-jerk line somewhere
+    // else in the world (only its shape counts).
+    req.demonstrations = vec![Demonstration {
+        dt: 1.0 / 120.0,
+        positions: (0..=96)
+            .map(|k| {
+                let s = k as f64 / 96.0;
+                let along = 10.0 * s.powi(3) - 15.0 * s.powi(4) + 6.0 * s.powi(5);
+                Vector3::new(1.0, 2.0, 0.5) + along * Vector3::new(0.0, 0.3, 0.0)
+            })
+            .collect(),
+    }];
+    let straight = plan_reach(&req).unwrap();
+    let (bi, st) = (off_line(&built_in), off_line(&straight));
+    println!("farthest off the line: built-in {bi:.4} m, straight {st:.4} m");
+    assert!((0.045..0.07).contains(&bi), "{bi}");
+    assert!(st < 0.005, "{st}");
+    assert!(straight.reach_error < 0.005);
+    let last = straight.samples.last().unwrap();
+    assert!((last.pose.translation.vector - req.goal.translation.vector).norm() < 1e-9);
+}
