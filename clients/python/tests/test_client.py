@@ -281,6 +281,27 @@ def test_a_frame_out_of_order_ends_the_session_naming_the_field(server):
     assert field_of(e.value) == "frame.timestamp"
 
 
+def test_a_reach_goes_round_the_obstacle_to_the_grasp(server):
+    start = np.eye(4)
+    start[:3, 3] = (0.0, 0.0, 0.4)
+    goal = np.diag([1.0, -1.0, -1.0, 1.0])  # a top grasp: the hand's z down
+    goal[:3, 3] = (0.5, 0.2, 0.1)
+    post = ((0.25, 0.1, 0.15), (0.04, 0.04, 0.15))
+    with Client(server.grpc) as c:
+        r = c.plan_reach(start, goal, approach=(0, 0, -1), obstacles=[post],
+                         support_plane=TABLE, hand_radius=0.04)
+        end = r.samples[-1].pose.position
+        assert np.allclose([end.x, end.y, end.z], goal[:3, 3])
+        assert r.obstacle_clearance >= 0.01 and r.closest_obstacle == 0
+        assert len(r.samples) == 211 and abs(r.samples[-1].time - 2.1) < 1e-9
+        with pytest.raises(grpc.RpcError) as e:
+            c.plan_reach(start, goal, obstacles=[((0.5, 0.2, 0.1), (0.05, 0.05, 0.05))])
+        assert e.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+        assert field_of(e.value) == "goal"
+        with pytest.raises(ValueError, match="start"):
+            c.plan_reach(np.zeros((3, 3)), goal)
+
+
 def test_stubs_match_the_proto_files(tmp_path):
     subprocess.run([str(HERE.parent / "generate.sh"), str(tmp_path)], check=True,
                    env={"PATH": str(Path(sys.executable).parent) + ":/usr/bin:/bin"})

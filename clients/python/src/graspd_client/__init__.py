@@ -7,6 +7,10 @@
         plan = c.plan_cloud(points, hand="shadow", seed=1, support_plane=((0, 0, 1), 0.0))
         print(plan.grasp_type, [ct.finger for ct in plan.contacts])
 
+        # A reaching trajectory to a grasp from above, clear of a box (4x4 poses).
+        goal = np.diag([1.0, -1.0, -1.0, 1.0]); goal[:3, 3] = (0.5, 0.2, 0.1)
+        reach = c.plan_reach(start, goal, approach=(0, 0, -1), obstacles=[(centre, half)])
+
         with c.stabilizer([Finger("th", layout="biotac")]) as session:
             setpoint = session.step(t, [Reading(pdc, pac, tdc, tac, electrodes)])
 
@@ -32,6 +36,7 @@ from graspd.v1 import (
     grasp_planner_pb2_grpc,
     hand_pb2,
     plan_pb2,
+    reach_pb2,
     ros_pb2,
     tactile_stabilizer_pb2 as tactile_pb2,
     tactile_stabilizer_pb2_grpc,
@@ -204,14 +209,14 @@ def rgbd_message(
     return frame
 
 
-def _pose(matrix) -> common_pb2.Pose:
+def _pose(matrix, name: str = "camera_to_world") -> common_pb2.Pose:
     """A 4x4 homogeneous rigid transform as a Pose (position + unit quaternion x, y, z, w)."""
     m = np.asarray(matrix, dtype=float)
     if m.shape != (4, 4) or not np.allclose(m[3], [0.0, 0.0, 0.0, 1.0]):
-        raise ValueError(f"camera_to_world: expected a 4x4 homogeneous matrix, got {m.shape}")
+        raise ValueError(f"{name}: expected a 4x4 homogeneous matrix, got {m.shape}")
     r = m[:3, :3]
     if not np.allclose(r @ r.T, np.eye(3), atol=1e-6) or np.linalg.det(r) < 0:
-        raise ValueError("camera_to_world: the rotation part is not a rotation")
+        raise ValueError(f"{name}: the rotation part is not a rotation")
     # Shepperd's method: the largest of w, x, y, z first, for accuracy.
     t = np.trace(r)
     k = int(np.argmax([t, r[0, 0], r[1, 1], r[2, 2]]))
@@ -360,6 +365,33 @@ class Client:
 
     def plan(self, request: plan_pb2.PlanGraspRequest) -> plan_pb2.PlanGraspResponse:
         return self._planner.PlanGrasp(request, timeout=self.timeout)
+
+    def plan_reach(self, start, goal, approach=None, obstacles=(), support_plane=None,
+                   hand_radius: Optional[float] = None,
+                   pregrasp_distance: Optional[float] = None,
+                   **options) -> reach_pb2.PlanReachResponse:
+        """A reaching trajectory from ``start`` to the grasp ``goal`` (4x4 hand poses, world),
+        the last ``pregrasp_distance`` along ``approach``; ``obstacles``: (centre, half_extents)
+        pairs of axis-aligned boxes; ``support_plane``: ((nx, ny, nz), offset); ``options``:
+        ReachOptions fields (reach_duration, approach_duration, time_step, horizon,
+        min_clearance). The answer's ``samples`` hold time, pose and velocity."""
+        request = reach_pb2.PlanReachRequest(
+            start=_pose(start, "start"),
+            goal=_pose(goal, "goal"),
+            obstacles=[reach_pb2.Obstacle(centre=_vec3(c), half_extents=_vec3(h))
+                       for c, h in obstacles],
+            options=reach_pb2.ReachOptions(**options),
+        )
+        if approach is not None:
+            request.approach.CopyFrom(_vec3(approach))
+        if support_plane is not None:
+            request.support_plane.CopyFrom(
+                common_pb2.Plane(normal=_vec3(support_plane[0]), offset=support_plane[1]))
+        if hand_radius is not None:
+            request.hand_radius = hand_radius
+        if pregrasp_distance is not None:
+            request.pregrasp_distance = pregrasp_distance
+        return self._planner.PlanReach(request, timeout=self.timeout)
 
     def plan_cloud(
         self,

@@ -5,6 +5,7 @@ import warnings
 
 from graspd.v1 import hand_pb2 as graspd_dot_v1_dot_hand__pb2
 from graspd.v1 import plan_pb2 as graspd_dot_v1_dot_plan__pb2
+from graspd.v1 import reach_pb2 as graspd_dot_v1_dot_reach__pb2
 
 GRPC_GENERATED_VERSION = '1.85.1'
 GRPC_VERSION = grpc.__version__
@@ -55,6 +56,11 @@ class GraspPlannerStub:
                 request_serializer=graspd_dot_v1_dot_hand__pb2.RegisterHandRequest.SerializeToString,
                 response_deserializer=graspd_dot_v1_dot_hand__pb2.RegisterHandResponse.FromString,
                 _registered_method=True)
+        self.PlanReach = channel.unary_unary(
+                '/graspd.v1.GraspPlanner/PlanReach',
+                request_serializer=graspd_dot_v1_dot_reach__pb2.PlanReachRequest.SerializeToString,
+                response_deserializer=graspd_dot_v1_dot_reach__pb2.PlanReachResponse.FromString,
+                _registered_method=True)
 
 
 class GraspPlannerServicer:
@@ -88,6 +94,13 @@ class GraspPlannerServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def PlanReach(self, request, context):
+        """A reaching trajectory from the hand's pose to a grasp, clear of obstacles and the table.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
 
 def add_GraspPlannerServicer_to_server(servicer, server):
     rpc_method_handlers = {
@@ -110,6 +123,11 @@ def add_GraspPlannerServicer_to_server(servicer, server):
                     servicer.RegisterHand,
                     request_deserializer=graspd_dot_v1_dot_hand__pb2.RegisterHandRequest.FromString,
                     response_serializer=graspd_dot_v1_dot_hand__pb2.RegisterHandResponse.SerializeToString,
+            ),
+            'PlanReach': grpc.unary_unary_rpc_method_handler(
+                    servicer.PlanReach,
+                    request_deserializer=graspd_dot_v1_dot_reach__pb2.PlanReachRequest.FromString,
+                    response_serializer=graspd_dot_v1_dot_reach__pb2.PlanReachResponse.SerializeToString,
             ),
     }
     generic_handler = grpc.method_handlers_generic_handler(
@@ -220,6 +238,33 @@ class GraspPlanner:
             '/graspd.v1.GraspPlanner/RegisterHand',
             graspd_dot_v1_dot_hand__pb2.RegisterHandRequest.SerializeToString,
             graspd_dot_v1_dot_hand__pb2.RegisterHandResponse.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def PlanReach(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/graspd.v1.GraspPlanner/PlanReach',
+            graspd_dot_v1_dot_reach__pb2.PlanReachRequest.SerializeToString,
+            graspd_dot_v1_dot_reach__pb2.PlanReachResponse.FromString,
             options,
             channel_credentials,
             insecure,
