@@ -149,42 +149,25 @@ async fn bad_reaches_are_refused_naming_the_field() {
             e.message()
         );
     }
-    let mut body = json_request();
-    body["obstacles"][0]["centre"] = json!([0.5, 0.2, 0.1]);
-    refused_naming(
-        http()
+    let rest_cases = [
+        ("goal", "/obstacles/0/centre", json!([0.5, 0.2, 0.1])),
+        ("options.horizon", "/options", json!({"horizon": 1000})),
+        ("hand_radius", "/hand_radius", json!("big")),
+    ];
+    for (field, at, value) in rest_cases {
+        let mut body = json_request();
+        match body.pointer_mut(at) {
+            Some(slot) => *slot = value,
+            None => body[&at[1..]] = value,
+        }
+        let response = http()
             .post(server.rest_url("/v1/reach"))
             .json(&body)
             .send()
             .await
-            .unwrap(),
-        "goal",
-    )
-    .await;
-    let mut body = json_request();
-    body["options"] = json!({"horizon": 1000});
-    refused_naming(
-        http()
-            .post(server.rest_url("/v1/reach"))
-            .json(&body)
-            .send()
-            .await
-            .unwrap(),
-        "options.horizon",
-    )
-    .await;
-    let mut body = json_request();
-    body["hand_radius"] = json!("big");
-    refused_naming(
-        http()
-            .post(server.rest_url("/v1/reach"))
-            .json(&body)
-            .send()
-            .await
-            .unwrap(),
-        "hand_radius",
-    )
-    .await;
+            .unwrap();
+        refused_naming(response, field).await;
+    }
     assert_valid_plan_works(&server).await;
     assert!(grpc.plan_reach(grpc_request()).await.is_ok());
 }

@@ -200,42 +200,70 @@ pub fn plan_reach(req: &ReachRequest) -> Result<Trajectory, FieldError> {
     }
     let reached = samples.last().expect("the start").pose.translation.vector;
     let reach_error = (reached - pre).norm();
-    // The approach: a straight minimum-jerk stretch onto the grasp.
-    let t0 = samples.last().expect("the start").time;
-    let m = (o.approach_duration / dt).round().max(1.0) as usize;
-    let travel = grasp - reached;
+    append_approach(
+        &mut samples,
+        &grasp,
+        &req.goal.rotation,
+        o.approach_duration,
+        dt,
+    );
+    measured(samples, &req.scene, o.min_clearance, reach_error)
+}
+
+/// The approach: from where the reach ended, a straight minimum-jerk stretch of `duration` s
+/// onto the grasp at `grasp`, turned as the grasp.
+fn append_approach(
+    samples: &mut Vec<ReachSample>,
+    grasp: &Vector3<f64>,
+    rotation: &UnitQuaternion<f64>,
+    duration: f64,
+    dt: f64,
+) {
+    let last = *samples.last().expect("the start");
+    let from = last.pose.translation.vector;
+    let travel = grasp - from;
+    let m = (duration / dt).round().max(1.0) as usize;
     for k in 1..=m {
         let s = k as f64 / m as f64;
         let along = 10.0 * s.powi(3) - 15.0 * s.powi(4) + 6.0 * s.powi(5);
-        let speed = (30.0 * s * s - 60.0 * s.powi(3) + 30.0 * s.powi(4)) / o.approach_duration;
-        samples.push(sample(
-            t0 + k as f64 * dt,
-            reached + along * travel,
-            speed * travel,
-            req.goal.rotation,
-        ));
+        let speed = (30.0 * s * s - 60.0 * s.powi(3) + 30.0 * s.powi(4)) / duration;
+        samples.push(ReachSample {
+            time: last.time + k as f64 * dt,
+            pose: Isometry3::from_parts((from + along * travel).into(), *rotation),
+            velocity: speed * travel,
+        });
     }
+}
+
+/// The trajectory with its clearances measured on its samples; refused naming the obstacle it
+/// comes closer to than `min_clearance`, or the table it passes under.
+fn measured(
+    samples: Vec<ReachSample>,
+    scene: &Scene,
+    min_clearance: f64,
+    reach_error: f64,
+) -> Result<Trajectory, FieldError> {
     let points: Vec<Point3<f64>> = samples
         .iter()
         .map(|s| Point3::from(s.pose.translation.vector))
         .collect();
     let obstacle_clearance = points
         .iter()
-        .filter_map(|p| req.scene.obstacle_clearance(p).map(|(c, i, _)| (c, i)))
+        .filter_map(|p| scene.obstacle_clearance(p).map(|(c, i, _)| (c, i)))
         .min_by(|a, b| a.0.total_cmp(&b.0));
     let table_clearance = points
         .iter()
-        .filter_map(|p| req.scene.table_height(p))
+        .filter_map(|p| scene.table_height(p))
         .min_by(f64::total_cmp);
     if let Some((c, i)) = obstacle_clearance
-        && c < o.min_clearance - 1e-6
+        && c < min_clearance - 1e-6
     {
         return Err(FieldError::new(
             format!("obstacles[{i}]"),
             format!(
                 "no reach found that keeps {:.0} mm from it (closest {:.1} mm): it blocks the \
                  way to the goal",
-                o.min_clearance * 1e3,
+                min_clearance * 1e3,
                 c * 1e3
             ),
         ));
