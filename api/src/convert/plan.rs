@@ -138,7 +138,7 @@ fn hints_from_proto(h: Option<pb::PlanHints>) -> Result<(PlanHints, ImageHints),
 
 /// The RGB-D frame as received (`field` names it: `rgbd`, `extra_views[i]`); sizes and
 /// encodings are checked here, pixels by the facade.
-fn rgbd_from_proto(f: pb::RgbdFrame, field: &str) -> Result<RgbdFrame, FieldError> {
+pub(crate) fn rgbd_from_proto(f: pb::RgbdFrame, field: &str) -> Result<RgbdFrame, FieldError> {
     let wire = |i: Option<pb::Image>| {
         let i = i.unwrap_or_default();
         WireImage {

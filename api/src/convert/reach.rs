@@ -1,11 +1,12 @@
 //! PlanReach: the request into [`ReachWire`] (its defaults and checks are
 //! [`crate::request::reach_request`]'s and the domain's), the trajectory back.
 
+use super::plan::rgbd_from_proto;
 use super::values::{point_from_proto, pose_to_proto, required, vec3_from_proto, vec3_to_proto};
-use crate::request::{ReachWire, WirePose, reach_request};
+use crate::request::{ReachCall, ReachWire, WirePose, reach_request};
 use graspd_core::FieldError;
 use graspd_core::planning::Pose;
-use graspd_core::reaching::{ReachRequest, Trajectory};
+use graspd_core::reaching::Trajectory;
 use graspd_proto::v1 as pb;
 use nalgebra::Quaternion;
 
@@ -22,8 +23,13 @@ fn wire_pose(p: &Option<pb::Pose>, field: &str) -> Result<Option<WirePose>, Fiel
     Ok(Some((position, quaternion(q))))
 }
 
-/// The request in domain terms.
-pub fn reach_request_from_proto(r: pb::PlanReachRequest) -> Result<ReachRequest, FieldError> {
+/// The request in domain terms, with the scene's frame.
+pub fn reach_request_from_proto(r: pb::PlanReachRequest) -> Result<ReachCall, FieldError> {
+    let scene = r
+        .scene
+        .clone()
+        .map(|f| rgbd_from_proto(f, "scene"))
+        .transpose()?;
     let o = r.options.unwrap_or_default();
     let obstacles = r
         .obstacles
@@ -40,7 +46,7 @@ pub fn reach_request_from_proto(r: pb::PlanReachRequest) -> Result<ReachRequest,
             ))
         })
         .collect::<Result<Vec<_>, FieldError>>()?;
-    reach_request(ReachWire {
+    let reach = reach_request(ReachWire {
         start: wire_pose(&r.start, "start")?,
         goal: wire_pose(&r.goal, "goal")?,
         approach: r.approach.as_ref().map(vec3_from_proto),
@@ -64,7 +70,8 @@ pub fn reach_request_from_proto(r: pb::PlanReachRequest) -> Result<ReachRequest,
             .iter()
             .map(|d| (d.dt, d.positions.iter().map(vec3_from_proto).collect()))
             .collect(),
-    })
+    })?;
+    Ok(ReachCall { reach, scene })
 }
 
 /// The trajectory as sent, with the server's time.

@@ -238,7 +238,11 @@ fn wire_image(img: ImageJson, part: Option<Vec<u8>>, field: &str) -> Result<Wire
 
 /// The frame as received (`field` names it: `rgbd`, `extra_views[i]`); sizes and encodings are
 /// checked here, pixels by the facade.
-fn rgbd_from_json(f: RgbdJson, parts: ImageParts, field: &str) -> Result<RgbdFrame, FieldError> {
+pub(crate) fn rgbd_from_json(
+    f: RgbdJson,
+    parts: ImageParts,
+    field: &str,
+) -> Result<RgbdFrame, FieldError> {
     let color = wire_image(f.color, parts.color, &format!("{field}.color"))?;
     let depth = wire_image(f.depth, parts.depth, &format!("{field}.depth"))?;
     let k = f.intrinsics.ok_or_else(|| {

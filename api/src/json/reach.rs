@@ -1,12 +1,13 @@
 //! `POST /v1/reach`: the PlanReach request and response in JSON (the proto's fields in
 //! snake_case; positions as `{x, y, z}` or `[x, y, z]`).
 
+use super::plan::{RgbdJson, rgbd_from_json};
 use super::values::{PlaneJson, PoseJson, QuaternionJson, Vec3Json};
-use crate::request::{ReachWire, WirePose, reach_request};
+use crate::request::{ReachCall, ReachWire, WirePose, reach_request};
 use crate::schemas::Vec3InputDoc;
 use graspd_core::FieldError;
 use graspd_core::planning::Pose;
-use graspd_core::reaching::{ReachRequest, Trajectory};
+use graspd_core::reaching::Trajectory;
 use nalgebra::Quaternion;
 use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;
@@ -69,6 +70,10 @@ pub struct ReachRequestJson {
     pub options: ReachOptionsJson,
     #[serde(default)]
     pub demonstrations: Vec<DemonstrationJson>,
+    /// The scene as an RGB-D frame (images in base64): its objects but the grasp's become
+    /// obstacles (the proto's `scene`).
+    #[serde(default)]
+    pub scene: Option<RgbdJson>,
 }
 
 fn quaternion(q: &QuaternionJson) -> Quaternion<f64> {
@@ -79,9 +84,13 @@ fn wire_pose(p: &PoseJson) -> WirePose {
     (p.position.point(), quaternion(&p.orientation))
 }
 
-/// The request in domain terms.
-pub fn reach_request_from_json(r: ReachRequestJson) -> Result<ReachRequest, FieldError> {
-    reach_request(ReachWire {
+/// The request in domain terms, with the scene's frame.
+pub fn reach_request_from_json(r: ReachRequestJson) -> Result<ReachCall, FieldError> {
+    let scene = r
+        .scene
+        .map(|f| rgbd_from_json(f, Default::default(), "scene"))
+        .transpose()?;
+    let reach = reach_request(ReachWire {
         start: Some(wire_pose(&r.start)),
         goal: Some(wire_pose(&r.goal)),
         approach: r.approach.map(|a| a.vector()),
@@ -109,7 +118,8 @@ pub fn reach_request_from_json(r: ReachRequestJson) -> Result<ReachRequest, Fiel
             .into_iter()
             .map(|d| (d.dt, d.positions.iter().map(|p| p.vector()).collect()))
             .collect(),
-    })
+    })?;
+    Ok(ReachCall { reach, scene })
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]

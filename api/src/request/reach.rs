@@ -1,10 +1,11 @@
 //! A PlanReach request as either transport sends it, before its defaults: [`ReachWire`], and
 //! the one place that fills the defaults in and turns the wire's poses, boxes and plane into
-//! the domain's [`ReachRequest`] ([`reach_request`]).
+//! the domain's [`ReachRequest`] ([`reach_request`]); with the scene's frame, if any, that is
+//! the facade's [`ReachCall`].
 
 use graspd_core::FieldError;
 use graspd_core::cloud::Plane;
-use graspd_core::perception::camera_pose;
+use graspd_core::perception::{RgbdFrame, camera_pose};
 use graspd_core::reaching::forcing_term::Demonstration;
 use graspd_core::reaching::{
     DEFAULT_HAND_RADIUS, DEFAULT_PREGRASP_DISTANCE, Obstacle, ReachOptions, ReachRequest, Scene,
@@ -16,6 +17,14 @@ pub type WirePose = (Point3<f64>, Quaternion<f64>);
 
 /// An obstacle as sent: centre, half extents, orientation (None: axis-aligned).
 pub type WireObstacle = (Point3<f64>, Vector3<f64>, Option<Quaternion<f64>>);
+
+/// A reach as the facade takes it: the request, and the scene's RGB-D frame whose other objects
+/// become obstacles.
+#[derive(Debug, Clone)]
+pub struct ReachCall {
+    pub reach: ReachRequest,
+    pub scene: Option<RgbdFrame>,
+}
 
 /// The request's fields as sent; `None` and 0 take the defaults.
 #[derive(Debug, Clone, Default)]

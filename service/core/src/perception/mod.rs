@@ -48,6 +48,6 @@ pub use roi::{RegionParams, SalientRegions, mask_box, region_of_interest, salien
 pub use saliency::{Plane32, SaliencyParams, saliency_map};
 pub use segmentation::{
     Cluster, Segmentation, SegmentationParams, TargetChoice, TargetHint, euclidean_clusters,
-    segment,
+    objects_on_plane, segment,
 };
 pub use view_fusion::{FusionReport, fuse_views};

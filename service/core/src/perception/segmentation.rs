@@ -238,26 +238,14 @@ pub fn segment(
         ));
     }
     let points = &cloud.cloud.points;
-    let plane = support_plane.or_else(|| find_plane(points, params));
-    let above: Vec<usize> = match &plane {
-        Some(pl) => (0..points.len())
-            .filter(|&i| pl.distance(&points[i]) > params.plane_margin)
-            .collect(),
-        None => (0..points.len()).collect(),
-    };
-    let lists = euclidean_clusters(
-        points,
-        &above,
-        params.cluster_radius,
-        params.min_cluster_points,
-    );
+    let (plane, lists, above) = objects_on_plane(points, support_plane, params);
     if lists.is_empty() {
         return Err(FieldError::new(
             "rgbd.depth",
             format!(
                 "no object found: {} of {} depth points lie {} the support plane, no cluster of \
                  ≥ {} points within {} m of each other stands on it",
-                points.len() - above.len(),
+                points.len() - above,
                 points.len(),
                 if plane.is_some() {
                     "on or below"
@@ -336,6 +324,30 @@ fn check_hint(hint: TargetHint, w: usize, h: usize) -> Result<(), FieldError> {
             }
         }
     }
+}
+
+/// The objects standing on the support plane: the plane (given, else found by RANSAC), the
+/// Euclidean clusters of the points above it (indices into `points`, largest first) and how
+/// many points lie above it.
+pub fn objects_on_plane(
+    points: &[Point3<f64>],
+    support_plane: Option<Plane>,
+    params: &SegmentationParams,
+) -> (Option<Plane>, Vec<Vec<usize>>, usize) {
+    let plane = support_plane.or_else(|| find_plane(points, params));
+    let above: Vec<usize> = match &plane {
+        Some(pl) => (0..points.len())
+            .filter(|&i| pl.distance(&points[i]) > params.plane_margin)
+            .collect(),
+        None => (0..points.len()).collect(),
+    };
+    let lists = euclidean_clusters(
+        points,
+        &above,
+        params.cluster_radius,
+        params.min_cluster_points,
+    );
+    (plane, lists, above.len())
 }
 
 /// RANSAC on an even subsample, so that the cost does not grow with the resolution.

@@ -22,6 +22,7 @@ pub mod forcing_term;
 pub mod ilqr;
 pub mod impedance;
 pub mod obstacles;
+pub mod scene_boxes;
 
 use crate::error::FieldError;
 use forcing_term::{Demonstration, ForcingTerm, phase, reach_frame};

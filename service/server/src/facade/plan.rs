@@ -233,7 +233,11 @@ impl GraspService {
     }
 
     /// Decodes a frame (`field` names it) within the configured pixel limit.
-    fn decode_frame(&self, frame: &RgbdFrame, field: &str) -> Result<DecodedFrame, ServiceError> {
+    pub(super) fn decode_frame(
+        &self,
+        frame: &RgbdFrame,
+        field: &str,
+    ) -> Result<DecodedFrame, ServiceError> {
         let limits = RgbdLimits {
             max_pixels: self.inner.limits.max_image_pixels,
         };

@@ -90,7 +90,7 @@ impl GraspPlanner for GraspPlannerService {
             .map_err(|e| to_status(e.into()))?;
         let (trajectory, ms) = self
             .runner
-            .run_blocking("reach", Transport::Grpc, move |s| s.plan_reach(&request))
+            .run_blocking("reach", Transport::Grpc, move |s| s.plan_reach(request))
             .await
             .map_err(to_status)?;
         Ok(Response::new(convert::trajectory_to_proto(&trajectory, ms)))

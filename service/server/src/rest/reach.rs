@@ -56,7 +56,7 @@ pub async fn reach(
     let body: ReachRequestJson = json::parse(&bytes, "body")?;
     let request = json::reach_request_from_json(body).map_err(ApiError::invalid)?;
     let (trajectory, ms) = runner
-        .run_blocking("reach", Transport::Rest, move |s| s.plan_reach(&request))
+        .run_blocking("reach", Transport::Rest, move |s| s.plan_reach(request))
         .await?;
     Ok(Json(json::trajectory_to_json(&trajectory, ms)))
 }

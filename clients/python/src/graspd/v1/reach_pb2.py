@@ -23,25 +23,26 @@ _sym_db = _symbol_database.Default()
 
 
 from graspd.v1 import common_pb2 as graspd_dot_v1_dot_common__pb2
+from graspd.v1 import plan_pb2 as graspd_dot_v1_dot_plan__pb2
 
 
-DESCRIPTOR = _descriptor_pool.Default().AddSerializedFile(b'\n\x15graspd/v1/reach.proto\x12\tgraspd.v1\x1a\x16graspd/v1/common.proto\"\x93\x01\n\x08Obstacle\x12\x1f\n\x06\x63\x65ntre\x18\x01 \x01(\x0b\x32\x0f.graspd.v1.Vec3\x12%\n\x0chalf_extents\x18\x02 \x01(\x0b\x32\x0f.graspd.v1.Vec3\x12/\n\x0borientation\x18\x03 \x01(\x0b\x32\x15.graspd.v1.QuaternionH\x00\x88\x01\x01\x42\x0e\n\x0c_orientation\"\x93\x01\n\x0cReachOptions\x12\x16\n\x0ereach_duration\x18\x01 \x01(\x01\x12\x19\n\x11\x61pproach_duration\x18\x02 \x01(\x01\x12\x11\n\ttime_step\x18\x03 \x01(\x01\x12\x0f\n\x07horizon\x18\x04 \x01(\r\x12\x1a\n\rmin_clearance\x18\x05 \x01(\x01H\x00\x88\x01\x01\x42\x10\n\x0e_min_clearance\"?\n\rDemonstration\x12\n\n\x02\x64t\x18\x01 \x01(\x01\x12\"\n\tpositions\x18\x02 \x03(\x0b\x32\x0f.graspd.v1.Vec3\"\xaa\x03\n\x10PlanReachRequest\x12\x1e\n\x05start\x18\x01 \x01(\x0b\x32\x0f.graspd.v1.Pose\x12\x1d\n\x04goal\x18\x02 \x01(\x0b\x32\x0f.graspd.v1.Pose\x12&\n\x08\x61pproach\x18\x03 \x01(\x0b\x32\x0f.graspd.v1.Vec3H\x00\x88\x01\x01\x12\x1e\n\x11pregrasp_distance\x18\x04 \x01(\x01H\x01\x88\x01\x01\x12&\n\tobstacles\x18\x05 \x03(\x0b\x32\x13.graspd.v1.Obstacle\x12,\n\rsupport_plane\x18\x06 \x01(\x0b\x32\x10.graspd.v1.PlaneH\x02\x88\x01\x01\x12\x18\n\x0bhand_radius\x18\x07 \x01(\x01H\x03\x88\x01\x01\x12(\n\x07options\x18\x08 \x01(\x0b\x32\x17.graspd.v1.ReachOptions\x12\x30\n\x0e\x64\x65monstrations\x18\t \x03(\x0b\x32\x18.graspd.v1.DemonstrationB\x0b\n\t_approachB\x14\n\x12_pregrasp_distanceB\x10\n\x0e_support_planeB\x0e\n\x0c_hand_radius\"b\n\x10TrajectorySample\x12\x0c\n\x04time\x18\x01 \x01(\x01\x12\x1d\n\x04pose\x18\x02 \x01(\x0b\x32\x0f.graspd.v1.Pose\x12!\n\x08velocity\x18\x03 \x01(\x0b\x32\x0f.graspd.v1.Vec3\"\x87\x02\n\x11PlanReachResponse\x12,\n\x07samples\x18\x01 \x03(\x0b\x32\x1b.graspd.v1.TrajectorySample\x12\x1f\n\x12obstacle_clearance\x18\x02 \x01(\x01H\x00\x88\x01\x01\x12\x1d\n\x10\x63losest_obstacle\x18\x03 \x01(\rH\x01\x88\x01\x01\x12\x1c\n\x0ftable_clearance\x18\x04 \x01(\x01H\x02\x88\x01\x01\x12\x13\n\x0breach_error\x18\x05 \x01(\x01\x12\x11\n\tserver_ms\x18\x06 \x01(\x01\x42\x15\n\x13_obstacle_clearanceB\x13\n\x11_closest_obstacleB\x12\n\x10_table_clearanceb\x06proto3')
+DESCRIPTOR = _descriptor_pool.Default().AddSerializedFile(b'\n\x15graspd/v1/reach.proto\x12\tgraspd.v1\x1a\x16graspd/v1/common.proto\x1a\x14graspd/v1/plan.proto\"\x93\x01\n\x08Obstacle\x12\x1f\n\x06\x63\x65ntre\x18\x01 \x01(\x0b\x32\x0f.graspd.v1.Vec3\x12%\n\x0chalf_extents\x18\x02 \x01(\x0b\x32\x0f.graspd.v1.Vec3\x12/\n\x0borientation\x18\x03 \x01(\x0b\x32\x15.graspd.v1.QuaternionH\x00\x88\x01\x01\x42\x0e\n\x0c_orientation\"\x93\x01\n\x0cReachOptions\x12\x16\n\x0ereach_duration\x18\x01 \x01(\x01\x12\x19\n\x11\x61pproach_duration\x18\x02 \x01(\x01\x12\x11\n\ttime_step\x18\x03 \x01(\x01\x12\x0f\n\x07horizon\x18\x04 \x01(\r\x12\x1a\n\rmin_clearance\x18\x05 \x01(\x01H\x00\x88\x01\x01\x42\x10\n\x0e_min_clearance\"?\n\rDemonstration\x12\n\n\x02\x64t\x18\x01 \x01(\x01\x12\"\n\tpositions\x18\x02 \x03(\x0b\x32\x0f.graspd.v1.Vec3\"\xde\x03\n\x10PlanReachRequest\x12\x1e\n\x05start\x18\x01 \x01(\x0b\x32\x0f.graspd.v1.Pose\x12\x1d\n\x04goal\x18\x02 \x01(\x0b\x32\x0f.graspd.v1.Pose\x12&\n\x08\x61pproach\x18\x03 \x01(\x0b\x32\x0f.graspd.v1.Vec3H\x00\x88\x01\x01\x12\x1e\n\x11pregrasp_distance\x18\x04 \x01(\x01H\x01\x88\x01\x01\x12&\n\tobstacles\x18\x05 \x03(\x0b\x32\x13.graspd.v1.Obstacle\x12,\n\rsupport_plane\x18\x06 \x01(\x0b\x32\x10.graspd.v1.PlaneH\x02\x88\x01\x01\x12\x18\n\x0bhand_radius\x18\x07 \x01(\x01H\x03\x88\x01\x01\x12(\n\x07options\x18\x08 \x01(\x0b\x32\x17.graspd.v1.ReachOptions\x12\x30\n\x0e\x64\x65monstrations\x18\t \x03(\x0b\x32\x18.graspd.v1.Demonstration\x12(\n\x05scene\x18\n \x01(\x0b\x32\x14.graspd.v1.RgbdFrameH\x04\x88\x01\x01\x42\x0b\n\t_approachB\x14\n\x12_pregrasp_distanceB\x10\n\x0e_support_planeB\x0e\n\x0c_hand_radiusB\x08\n\x06_scene\"b\n\x10TrajectorySample\x12\x0c\n\x04time\x18\x01 \x01(\x01\x12\x1d\n\x04pose\x18\x02 \x01(\x0b\x32\x0f.graspd.v1.Pose\x12!\n\x08velocity\x18\x03 \x01(\x0b\x32\x0f.graspd.v1.Vec3\"\x87\x02\n\x11PlanReachResponse\x12,\n\x07samples\x18\x01 \x03(\x0b\x32\x1b.graspd.v1.TrajectorySample\x12\x1f\n\x12obstacle_clearance\x18\x02 \x01(\x01H\x00\x88\x01\x01\x12\x1d\n\x10\x63losest_obstacle\x18\x03 \x01(\rH\x01\x88\x01\x01\x12\x1c\n\x0ftable_clearance\x18\x04 \x01(\x01H\x02\x88\x01\x01\x12\x13\n\x0breach_error\x18\x05 \x01(\x01\x12\x11\n\tserver_ms\x18\x06 \x01(\x01\x42\x15\n\x13_obstacle_clearanceB\x13\n\x11_closest_obstacleB\x12\n\x10_table_clearanceb\x06proto3')
 
 _globals = globals()
 _builder.BuildMessageAndEnumDescriptors(DESCRIPTOR, _globals)
 _builder.BuildTopDescriptorsAndMessages(DESCRIPTOR, 'graspd.v1.reach_pb2', _globals)
 if not _descriptor._USE_C_DESCRIPTORS:
   DESCRIPTOR._loaded_options = None
-  _globals['_OBSTACLE']._serialized_start=61
-  _globals['_OBSTACLE']._serialized_end=208
-  _globals['_REACHOPTIONS']._serialized_start=211
-  _globals['_REACHOPTIONS']._serialized_end=358
-  _globals['_DEMONSTRATION']._serialized_start=360
-  _globals['_DEMONSTRATION']._serialized_end=423
-  _globals['_PLANREACHREQUEST']._serialized_start=426
-  _globals['_PLANREACHREQUEST']._serialized_end=852
-  _globals['_TRAJECTORYSAMPLE']._serialized_start=854
-  _globals['_TRAJECTORYSAMPLE']._serialized_end=952
-  _globals['_PLANREACHRESPONSE']._serialized_start=955
-  _globals['_PLANREACHRESPONSE']._serialized_end=1218
+  _globals['_OBSTACLE']._serialized_start=83
+  _globals['_OBSTACLE']._serialized_end=230
+  _globals['_REACHOPTIONS']._serialized_start=233
+  _globals['_REACHOPTIONS']._serialized_end=380
+  _globals['_DEMONSTRATION']._serialized_start=382
+  _globals['_DEMONSTRATION']._serialized_end=445
+  _globals['_PLANREACHREQUEST']._serialized_start=448
+  _globals['_PLANREACHREQUEST']._serialized_end=926
+  _globals['_TRAJECTORYSAMPLE']._serialized_start=928
+  _globals['_TRAJECTORYSAMPLE']._serialized_end=1026
+  _globals['_PLANREACHRESPONSE']._serialized_start=1029
+  _globals['_PLANREACHRESPONSE']._serialized_end=1292
 # @@protoc_insertion_point(module_scope)
