@@ -1,11 +1,11 @@
 //! Tactile sessions, frames and stabilization setpoints (the Stabilize stream).
 
-use crate::request::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
+use crate::request::{LawWire, LayoutChoice, TactileFingerRequest, TactileSessionRequest};
 use graspd_core::FieldError;
 use graspd_core::tactile::{
-    Baseline, ContactEvent, ControlMode, DesiredForceLaw, DetectorChoice, ElectrodePolarity,
-    FingerReading, FingerResult, ForceUnit, Frame, FrameResult, LayoutSpec, Material,
-    ModelFreeThresholds, PidGains, SlipDirection, StabilizerConfig, TareConfig,
+    Baseline, ContactEvent, ControlMode, DetectorChoice, ElectrodePolarity, FingerReading,
+    FingerResult, ForceUnit, Frame, FrameResult, LayoutSpec, Material, ModelFreeThresholds,
+    PidGains, SlipDirection, StabilizerConfig, TareConfig,
 };
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::stabilize_request::Kind;
@@ -100,14 +100,15 @@ pub fn tactile_session_from_proto(
             fingers: Vec::new(),
             window_length: usize_or(s.window_length, d.window_length),
             stride: usize_or(s.stride, d.stride),
-            law: DesiredForceLaw {
-                f0: s.f0.unwrap_or(d.law.f0),
-                delta_material: s.delta_material.unwrap_or(d.law.delta_material),
-                delta_slip: s.delta_slip.unwrap_or(d.law.delta_slip),
-                f_min: s.f_min.unwrap_or(d.law.f_min),
-                f_max: s.f_max.unwrap_or(d.law.f_max),
-                latch_slip: s.latch_slip.unwrap_or(d.law.latch_slip),
-            },
+            law: LawWire {
+                f0: s.f0,
+                delta_material: s.delta_material,
+                delta_slip: s.delta_slip,
+                f_min: s.f_min,
+                f_max: s.f_max,
+                latch_slip: s.latch_slip,
+            }
+            .law(),
             pid: PidGains {
                 kp: p.kp.unwrap_or(pd.kp),
                 ki: p.ki.unwrap_or(pd.ki),

@@ -1,10 +1,10 @@
 //! Tactile sessions, frames, `POST /v1/tactile/analyze` and the stabilize stream's messages.
 
-use crate::request::{LayoutChoice, TactileFingerRequest, TactileSessionRequest};
+use crate::request::{LawWire, LayoutChoice, TactileFingerRequest, TactileSessionRequest};
 use crate::schemas::{DetectorDoc, ElectrodePolarityDoc, FrameResultDoc, LayoutDoc, PidGainsDoc};
 use graspd_core::tactile::{
-    Baseline, DesiredForceLaw, DetectorChoice, ElectrodePolarity, FingerReading, Frame,
-    FrameResult, LayoutSpec, ModelFreeThresholds, PidGains, StabilizerConfig, TareConfig,
+    Baseline, DetectorChoice, ElectrodePolarity, FingerReading, Frame, FrameResult, LayoutSpec,
+    ModelFreeThresholds, PidGains, StabilizerConfig, TareConfig,
 };
 use serde::{Deserialize, Serialize};
 use utoipa::{IntoParams, ToSchema};
@@ -278,14 +278,15 @@ pub fn tactile_session_from_json(s: TactileSessionJson) -> TactileSessionRequest
             fingers: Vec::new(),
             window_length: s.window_length.unwrap_or(d.window_length),
             stride: s.stride.unwrap_or(d.stride),
-            law: DesiredForceLaw {
-                f0: s.f0.unwrap_or(d.law.f0),
-                delta_material: s.delta_material.unwrap_or(d.law.delta_material),
-                delta_slip: s.delta_slip.unwrap_or(d.law.delta_slip),
-                f_min: s.f_min.unwrap_or(d.law.f_min),
-                f_max: s.f_max.unwrap_or(d.law.f_max),
-                latch_slip: s.latch_slip.unwrap_or(d.law.latch_slip),
-            },
+            law: LawWire {
+                f0: s.f0,
+                delta_material: s.delta_material,
+                delta_slip: s.delta_slip,
+                f_min: s.f_min,
+                f_max: s.f_max,
+                latch_slip: s.latch_slip,
+            }
+            .law(),
             pid: s.pid.unwrap_or(d.pid),
             alpha: s.alpha.unwrap_or(d.alpha),
             calibration_gain: s.calibration_gain,
