@@ -4,6 +4,12 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 venv="$root/.tools/pyclient-venv"
+# The server loads its built-in grasp-type model through ONNX Runtime, as under `make test`.
+if [ -z "${ORT_DYLIB_PATH:-}" ]; then
+  for lib in "$root"/.tools/onnxruntime/libonnxruntime.so.*; do
+    [ -f "$lib" ] && export ORT_DYLIB_PATH="$lib" && break
+  done
+fi
 if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
 fi
