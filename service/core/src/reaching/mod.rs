@@ -119,10 +119,18 @@ pub fn plan_reach(req: &ReachRequest) -> Result<Trajectory, FieldError> {
     let o = req.options;
     let model = ImpedanceModel::default();
     let up = req.scene.table.map_or(Vector3::z(), |t| t.normal);
+    // The built-in demonstration's weights are learned once per process, a request's own
+    // demonstrations with each request.
+    static BUILT_IN: std::sync::OnceLock<ForcingTerm> = std::sync::OnceLock::new();
+    let learned;
     let forcing = if req.demonstrations.is_empty() {
-        ForcingTerm::learn(&model, &[Demonstration::minimum_jerk()], &Vector3::z())?
+        BUILT_IN.get_or_init(|| {
+            ForcingTerm::learn(&model, &[Demonstration::minimum_jerk()], &Vector3::z())
+                .expect("the built-in demonstration is valid")
+        })
     } else {
-        ForcingTerm::learn(&model, &req.demonstrations, &up)?
+        learned = ForcingTerm::learn(&model, &req.demonstrations, &up)?;
+        &learned
     };
     let start = req.start.translation.vector;
     let grasp = req.goal.translation.vector;
