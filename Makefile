@@ -3,7 +3,7 @@ CARGO ?= cargo
 # Extra flags for `make run`, e.g. make run ARGS="--rest-addr 127.0.0.1:8081 --log-format json"
 ARGS ?=
 
-.PHONY: build run test fmt lint fuzz models models-grasp-type models-tactile sim-bench sim-stabilize
+.PHONY: build run test fmt lint fuzz models models-grasp-type models-tactile models-recogniser sim-bench sim-stabilize
 
 # The ONNX Runtime library that ort loads at run time (grasp-type model, docs/model-contract.md);
 # `run` and `test` fetch it first with scripts/fetch-onnxruntime.sh.
@@ -54,15 +54,18 @@ fuzz:
 
 # Retrains the shipped models (models/*/MODEL_CARD.md) from generated data on the CPU: installs
 # PyTorch into .tools/models-venv, generates the data with fixed seeds, trains, exports the ONNX
-# files over the committed ones and checks them against PyTorch. About 20 + 10 minutes on two
+# files over the committed ones and checks them against PyTorch. About 20 + 10 + 12 minutes on two
 # cores; never run by CI.
-models: models-grasp-type models-tactile
+models: models-grasp-type models-tactile models-recogniser
 
 models-grasp-type:
 	models/grasp_type/train.sh
 
 models-tactile:
 	models/tactile/train.sh
+
+models-recogniser:
+	models/recogniser/train.sh
 
 # The grasp benchmark in MuJoCo (clients/sim/README.md, docs/sim-benchmark.md): starts a release
 # graspd on loopback and runs graspd-sim bench with the Robotiq 2F-85, Barrett, Shadow and Allegro

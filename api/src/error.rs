@@ -56,6 +56,7 @@ impl From<PlanError> for ServiceError {
     fn from(e: PlanError) -> Self {
         match e {
             PlanError::InvalidInput(f) => ServiceError::InvalidArgument(f),
+            PlanError::NotFound(f) => ServiceError::NotFound(f),
             PlanError::Unimplemented(m) => ServiceError::Unimplemented(m),
         }
     }

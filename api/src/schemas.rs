@@ -258,6 +258,7 @@ doc_schema!(
         [
             TargetChoice::Pixel,
             TargetChoice::Region,
+            TargetChoice::Object,
             TargetChoice::Saliency,
             TargetChoice::ImageCentre,
         ],

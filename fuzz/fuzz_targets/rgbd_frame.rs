@@ -3,11 +3,11 @@
 //! ROI) when the frame decodes. Layout: byte 0 picks the encodings, bytes 1–2 the size (each
 //! side 1..=64), bytes 3–4 where the colour bytes end; the rest is colour then depth data.
 #![no_main]
-use graspd_core::perception::{
-    CameraIntrinsics, ColorEncoding, DepthEncoding, ImageData, InformationParams, RgbdFrame,
-    RgbdLimits, TargetHint, grasp_information,
-};
 use graspd_core::GraspType;
+use graspd_core::perception::{
+    CameraIntrinsics, ColorEncoding, DepthEncoding, ImageData, InformationParams, PerceptionModels,
+    RgbdFrame, RgbdLimits, TargetHint, grasp_information,
+};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
@@ -20,7 +20,11 @@ fuzz_target!(|data: &[u8]| {
         ColorEncoding::Png,
         ColorEncoding::Jpeg,
     ];
-    let depths = [DepthEncoding::Mono16, DepthEncoding::Float32, DepthEncoding::Png16];
+    let depths = [
+        DepthEncoding::Mono16,
+        DepthEncoding::Float32,
+        DepthEncoding::Png16,
+    ];
     let (w, h) = (1 + (data[1] % 64) as usize, 1 + (data[2] % 64) as usize);
     let body = &data[5..];
     let split = (u16::from_le_bytes([data[3], data[4]]) as usize).min(body.len());
@@ -66,7 +70,7 @@ fuzz_target!(|data: &[u8]| {
         &decoded,
         hint,
         None,
-        None,
+        PerceptionModels::default(),
         &GraspType::ALL,
         &InformationParams::default(),
     );

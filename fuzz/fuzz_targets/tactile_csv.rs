@@ -22,6 +22,7 @@ fuzz_target!(|data: &[u8]| {
             name: "f".into(),
             layout,
             tare: TareConfig::pretared(),
+            electrodes_only: recording.electrodes_only,
         }]);
         let _ = analyze(config, &frames);
     }

@@ -14,7 +14,7 @@ case " $* " in
 *" --data "* | *" --data="*) exec nice "$py" "$here/train.py" "$@" ;;
 esac
 data="${GRASP_TYPE_DATA:-$root/target/grasp_type_data}"
-(cd "$root" && cargo build --release -p graspd-grasp-type-data)
+(cd "$root" && cargo build --release -p graspd-model-data)
 gen="$root/target/release/gen-grasp-type-data"
 for split in "train 6000 1" "val 400 2" "test 600 3"; do
 	read -r name count seed <<<"$split"

@@ -15,7 +15,7 @@ const LAYERS: [(&str, u8); 9] = [
     ("graspd-api", 1),
     ("graspd-testkit", 1),
     ("graspd", 2),
-    ("graspd-grasp-type-data", 2),
+    ("graspd-model-data", 2),
     ("graspctl", 2),
     ("graspd-sim", 2),
     ("graspd-e2e", 3),

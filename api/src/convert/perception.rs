@@ -1,7 +1,9 @@
 //! The perception report of a PlanGrasp response (RGB-D input).
 
 use graspd_core::FieldError;
-use graspd_core::perception::{PerceptionReport, PerceptionTimings, ProbabilityMaps, TargetChoice};
+use graspd_core::perception::{
+    PerceptionReport, PerceptionTimings, ProbabilityMaps, RecognisedObject, TargetChoice,
+};
 use graspd_proto::v1 as pb;
 
 pub fn perception_to_proto(r: &PerceptionReport) -> pb::Perception {
@@ -22,10 +24,22 @@ pub fn perception_to_proto(r: &PerceptionReport) -> pb::Perception {
         object_points: r.object_points as u64,
         fused_views: r.fused_views as u32,
         fused_points: r.fused_points as u64,
+        recognised: r
+            .recognised
+            .iter()
+            .map(|o| pb::RecognisedObject {
+                class_name: o.class.clone(),
+                probability: o.probability,
+                u: o.pixel_centroid[0],
+                v: o.pixel_centroid[1],
+                points: o.points as u64,
+            })
+            .collect(),
         timings: Some(pb::PerceptionTimings {
             decode: t.decode,
             saliency: t.saliency,
             segmentation: t.segmentation,
+            recognition: t.recognition,
             roi: t.roi,
             grasp_type: t.grasp_type,
             total: t.total,
@@ -87,11 +101,23 @@ pub fn perception_from_proto(
         object_points: r.object_points as usize,
         fused_views: r.fused_views as usize,
         fused_points: r.fused_points as usize,
+        recognised: r
+            .recognised
+            .into_iter()
+            .map(|o| RecognisedObject {
+                class: o.class_name,
+                probability: o.probability,
+                pixel_centroid: [o.u, o.v],
+                points: o.points as usize,
+                probabilities: Vec::new(),
+            })
+            .collect(),
         attention_pixel,
         timings: PerceptionTimings {
             decode: t.decode,
             saliency: t.saliency,
             segmentation: t.segmentation,
+            recognition: t.recognition,
             roi: t.roi,
             grasp_type: t.grasp_type,
             total: t.total,

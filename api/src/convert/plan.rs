@@ -131,6 +131,7 @@ fn hints_from_proto(h: Option<pb::PlanHints>) -> Result<(PlanHints, ImageHints),
     let image = ImageHints {
         attention_pixel: h.attention_pixel.map(|p| (p.u, p.v)),
         region: h.region.map(|r| [r.u_min, r.v_min, r.u_max, r.v_max]),
+        object: h.object.clone(),
         most_salient: h.most_salient,
     };
     Ok((hints, image))
@@ -230,6 +231,7 @@ fn hints_to_proto(h: &PlanHints, image: &ImageHints) -> pb::PlanHints {
                 u_max,
                 v_max,
             }),
+        object: image.object.clone(),
         most_salient: image.most_salient,
     }
 }

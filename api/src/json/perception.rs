@@ -3,7 +3,9 @@
 use super::values::RegionJson;
 use crate::schemas::{PerceptionTimingsDoc, TargetChoiceDoc};
 use base64::Engine;
-use graspd_core::perception::{PerceptionReport, PerceptionTimings, TargetChoice};
+use graspd_core::perception::{
+    PerceptionReport, PerceptionTimings, RecognisedObject, TargetChoice,
+};
 use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;
 
@@ -14,6 +16,31 @@ pub struct ProbabilityMapsJson {
     pub width: usize,
     pub height: usize,
     pub values: String,
+}
+
+/// What the recogniser took one object in view for (`hints.object`), as in the proto.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct RecognisedObjectJson {
+    /// The most probable class: a known object's name, or `unknown`.
+    pub class_name: String,
+    pub probability: f64,
+    /// Mean pixel of the object.
+    pub u: f64,
+    pub v: f64,
+    /// Its depth points.
+    pub points: usize,
+}
+
+impl From<&RecognisedObject> for RecognisedObjectJson {
+    fn from(o: &RecognisedObject) -> Self {
+        Self {
+            class_name: o.class.clone(),
+            probability: o.probability,
+            u: o.pixel_centroid[0],
+            v: o.pixel_centroid[1],
+            points: o.points,
+        }
+    }
 }
 
 /// The Perception message in JSON.
@@ -32,6 +59,9 @@ pub struct PerceptionJson {
     pub fused_views: usize,
     #[serde(default)]
     pub fused_points: usize,
+    /// What the recogniser took each object in view for (with `hints.object`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub recognised: Vec<RecognisedObjectJson>,
     #[schema(value_type = PerceptionTimingsDoc)]
     pub timings: PerceptionTimings,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -56,6 +86,11 @@ impl From<&PerceptionReport> for PerceptionJson {
             object_points: r.object_points,
             fused_views: r.fused_views,
             fused_points: r.fused_points,
+            recognised: r
+                .recognised
+                .iter()
+                .map(RecognisedObjectJson::from)
+                .collect(),
             timings: r.timings,
             probability_maps: r.probability_maps.as_ref().map(|m| ProbabilityMapsJson {
                 width: m.width,

@@ -95,6 +95,10 @@ pub struct HintsJson {
     pub attention_pixel: Option<PixelJson>,
     #[serde(default)]
     pub region: Option<RegionJson>,
+    /// The object the recogniser takes for this name is the target (`"apple"`); not found:
+    /// 404 naming the objects found.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub object: String,
     #[serde(default)]
     pub most_salient: bool,
 }
@@ -391,6 +395,7 @@ pub fn plan_request_from_json(
     let image_hints = ImageHints {
         attention_pixel: h.attention_pixel.map(|p| (p.u, p.v)),
         region: h.region.map(|r| [r.u_min, r.v_min, r.u_max, r.v_max]),
+        object: h.object.clone(),
         most_salient: h.most_salient,
     };
     let o = r.output.unwrap_or_default();

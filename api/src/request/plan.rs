@@ -22,14 +22,19 @@ pub enum HandChoice {
     Inline(Box<HandDescription>),
 }
 
+/// The longest `hints.object` accepted, bytes.
+pub const MAX_OBJECT_NAME: usize = 128;
+
 /// Hints that only make sense on an image (RGB-D input); with a cloud they are refused rather
 /// than ignored.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct ImageHints {
     /// The object at this pixel (u, v), and the attention point there.
     pub attention_pixel: Option<(u32, u32)>,
     /// The object with most pixels in [u_min, u_max) × [v_min, v_max).
     pub region: Option<[u32; 4]>,
+    /// The object the recogniser takes for this name (empty: none).
+    pub object: String,
     /// The most salient object (the default without a pixel or region).
     pub most_salient: bool,
 }
@@ -41,6 +46,8 @@ impl ImageHints {
             Some("hints.attention_pixel")
         } else if self.region.is_some() {
             Some("hints.region")
+        } else if !self.object.is_empty() {
+            Some("hints.object")
         } else if self.most_salient {
             Some("hints.most_salient")
         } else {
@@ -50,6 +57,21 @@ impl ImageHints {
 
     /// The segmentation's target hint; errors name the conflicting hint.
     pub fn target(&self) -> Result<TargetHint, FieldError> {
+        if !self.object.is_empty() {
+            if self.attention_pixel.is_some() || self.region.is_some() {
+                return Err(FieldError::new(
+                    "hints.object",
+                    "give one of attention_pixel, region and object",
+                ));
+            }
+            if self.object.trim().is_empty() || self.object.len() > MAX_OBJECT_NAME {
+                return Err(FieldError::new(
+                    "hints.object",
+                    format!("needs a name of 1 to {MAX_OBJECT_NAME} characters"),
+                ));
+            }
+            return Ok(TargetHint::Object(self.object.clone()));
+        }
         match (self.attention_pixel, self.region) {
             (Some(_), Some(_)) => Err(FieldError::new(
                 "hints.region",

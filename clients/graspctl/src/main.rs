@@ -100,6 +100,10 @@ struct PlanArgs {
     /// The object with most pixels in this box is the target: u_min,v_min,u_max,v_max.
     #[arg(long, value_name = "U0,V0,U1,V1", value_parser = parse_numbers::<4>, requires = "rgb")]
     region: Option<[f64; 4]>,
+    /// The object the server's recogniser takes for this name is the target ("apple",
+    /// "tomato soup can").
+    #[arg(long, value_name = "NAME", requires = "rgb")]
+    object: Option<String>,
     /// Write the overlay (ROI, attention point, heat map, contacts, opposition) to this PNG.
     #[arg(long, value_name = "FILE", requires = "rgb")]
     overlay: Option<PathBuf>,
@@ -340,6 +344,7 @@ fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
         image_hints: ImageHints {
             attention_pixel: args.pixel.map(|[u, v]| (pixel(u), pixel(v))),
             region: args.region.map(|r| r.map(pixel)),
+            object: args.object.clone().unwrap_or_default(),
             most_salient: false,
         },
         output: OutputOptions {

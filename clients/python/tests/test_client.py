@@ -196,6 +196,12 @@ def test_rgbd_frames_are_encoded_for_the_wire(server):
             c.plan_rgbd(color, np.zeros((h, w), np.uint16), 150.0, 150.0, 79.5, 59.5)
         assert e.value.code() == grpc.StatusCode.INVALID_ARGUMENT
         assert field_of(e.value) == "rgbd.depth.data"
+        # By name: the red block is none of the objects the recogniser knows.
+        with pytest.raises(grpc.RpcError) as e:
+            c.plan_rgbd(color, depth, 150.0, 150.0, 79.5, 59.5, object="banana")
+        assert e.value.code() == grpc.StatusCode.NOT_FOUND
+        assert field_of(e.value) == "hints.object"
+        assert "found: " in e.value.details()
 
 
 def test_further_views_go_with_their_camera_poses(server):

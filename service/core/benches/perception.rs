@@ -14,13 +14,22 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use graspd_core::onnx_runtime::init_onnx_runtime;
 use graspd_core::perception::{
     CameraIntrinsics, CloudFrame, ColorEncoding, DepthEncoding, GraspTypeModel, ImageData,
-    InformationParams, RegionParams, RgbdFrame, RgbdLimits, SaliencyParams, SegmentationParams,
-    TargetHint, depth_to_cloud, grasp_information, saliency_map, salient_regions, segment,
+    InformationParams, PerceptionModels, RegionParams, RgbdFrame, RgbdLimits, SaliencyParams,
+    SegmentationParams, TargetHint, depth_to_cloud, grasp_information, saliency_map,
+    salient_regions, segment,
 };
 use graspd_core::{HandCatalog, PlanHints, PlanInput, PlannerOptions, plan};
 use graspd_testkit::Object;
 use graspd_testkit::rgbd::{RgbdRender, RgbdScene, SceneObject};
 use std::hint::black_box;
+
+/// The grasp-type model alone.
+fn models(m: Option<&GraspTypeModel>) -> PerceptionModels<'_> {
+    PerceptionModels {
+        grasp_type: m,
+        recogniser: None,
+    }
+}
 
 fn frame(r: &RgbdRender) -> RgbdFrame {
     RgbdFrame {
@@ -159,17 +168,30 @@ fn bench_perception(c: &mut Criterion) {
             b.iter(|| {
                 let d = raw.decode("rgbd", &lim).unwrap();
                 black_box(
-                    grasp_information(&d, TargetHint::Auto, None, m, &realisable, &info_params)
-                        .unwrap(),
+                    grasp_information(
+                        &d,
+                        TargetHint::Auto,
+                        None,
+                        models(m),
+                        &realisable,
+                        &info_params,
+                    )
+                    .unwrap(),
                 )
             })
         });
         g.bench_function(format!("rgbd_plan_shadow_{name}"), |b| {
             b.iter(|| {
                 let d = raw.decode("rgbd", &lim).unwrap();
-                let info =
-                    grasp_information(&d, TargetHint::Auto, None, m, &realisable, &info_params)
-                        .unwrap();
+                let info = grasp_information(
+                    &d,
+                    TargetHint::Auto,
+                    None,
+                    models(m),
+                    &realisable,
+                    &info_params,
+                )
+                .unwrap();
                 black_box(
                     plan(PlanInput {
                         cloud: info.object,

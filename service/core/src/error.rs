@@ -26,6 +26,9 @@ pub enum PlanError {
     /// The request is malformed or cannot be served as given.
     #[error(transparent)]
     InvalidInput(#[from] FieldError),
+    /// The request names something that is not there (an object not in view).
+    #[error(transparent)]
+    NotFound(FieldError),
     /// The input is valid but this capability is not implemented yet.
     #[error("{0}")]
     Unimplemented(String),

@@ -5,8 +5,8 @@
 
 use graspd_core::perception::{
     CameraIntrinsics, CloudFrame, ColorEncoding, DecodedFrame, DepthEncoding, ImageData,
-    InformationParams, RgbdFrame, RgbdLimits, SaliencyParams, SegmentationParams, TargetChoice,
-    TargetHint, depth_to_cloud, grasp_information, saliency_map, segment,
+    InformationParams, PerceptionModels, RgbdFrame, RgbdLimits, SaliencyParams, SegmentationParams,
+    TargetChoice, TargetHint, depth_to_cloud, grasp_information, saliency_map, segment,
 };
 use graspd_testkit::Object;
 use graspd_testkit::rgbd::{RgbdRender, RgbdScene, SceneObject};
@@ -414,9 +414,9 @@ fn grasp_information_then_a_plan_for_each_table_5_2_object() {
         for hint in [TargetHint::Auto, TargetHint::Pixel { u, v }] {
             let info = grasp_information(
                 &frame,
-                hint,
+                hint.clone(),
                 None,
-                None,
+                PerceptionModels::default(),
                 &hand.realisable_types(),
                 &InformationParams::default(),
             )

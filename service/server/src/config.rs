@@ -96,6 +96,13 @@ pub struct Cli {
     /// model. A given file that does not load or breaks the contract stops the start.
     #[arg(long, env = "GRASPD_TACTILE_MODEL", value_name = "FILE")]
     pub tactile_model: Option<PathBuf>,
+    /// The recogniser that finds `hints.object` among the objects in view (ONNX,
+    /// models/recogniser/MODEL_CARD.md) [default: the copy of models/recogniser/recogniser.onnx
+    /// built into graspd; if it cannot be loaded (no ONNX Runtime) graspd warns and refuses
+    /// `hints.object`]. `none`: no model. A given file that does not load or breaks the contract
+    /// stops the start.
+    #[arg(long, env = "GRASPD_RECOGNISER_MODEL", value_name = "FILE")]
+    pub recogniser_model: Option<PathBuf>,
     /// libonnxruntime.so (1.31) to load the model with [default: $ORT_DYLIB_PATH].
     #[arg(long, env = "GRASPD_ONNXRUNTIME", value_name = "FILE")]
     pub onnxruntime: Option<PathBuf>,
@@ -168,6 +175,7 @@ pub struct FileConfig {
     pub auth_tokens_file: Option<PathBuf>,
     pub grasp_type_model: Option<PathBuf>,
     pub tactile_model: Option<PathBuf>,
+    pub recogniser_model: Option<PathBuf>,
     pub onnxruntime: Option<PathBuf>,
     pub model_threads: Option<usize>,
     pub log: Option<String>,
@@ -209,6 +217,9 @@ pub struct Settings {
     /// `None`: the built-in copy; `Some("none")`: no model.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tactile_model: Option<PathBuf>,
+    /// `None`: the built-in copy; `Some("none")`: no model.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recogniser_model: Option<PathBuf>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub onnxruntime: Option<PathBuf>,
     pub model_threads: usize,
@@ -330,6 +341,7 @@ impl Settings {
             auth_tokens_file,
             grasp_type_model: cli.grasp_type_model.clone().or(file.grasp_type_model),
             tactile_model: cli.tactile_model.clone().or(file.tactile_model),
+            recogniser_model: cli.recogniser_model.clone().or(file.recogniser_model),
             onnxruntime: cli.onnxruntime.clone().or(file.onnxruntime),
             model_threads: cli.model_threads.or(file.model_threads).unwrap_or(1),
             log: cli

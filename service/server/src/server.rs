@@ -8,7 +8,7 @@ use crate::runner::PlanRunner;
 use crate::tls::{Listening, Tls, TlsError};
 use crate::{grpc, rest};
 use graspd_core::onnx_runtime::init_onnx_runtime;
-use graspd_core::perception::GraspTypeModel;
+use graspd_core::perception::{GraspTypeModel, RecognitionModel};
 use graspd_core::tactile::{TactileModel, TactileModelError};
 use std::future::Future;
 use std::io::Write;
@@ -63,6 +63,10 @@ const EMBEDDED_GRASP_TYPE_NAME: &str = "built-in models/grasp_type/grasp_type.on
 const EMBEDDED_TACTILE_MODEL: &[u8] =
     include_bytes!("../../../models/tactile/tactile_detector.onnx");
 const EMBEDDED_TACTILE_NAME: &str = "built-in models/tactile/tactile_detector.onnx";
+/// models/recogniser/recogniser.onnx (about 1 MB).
+const EMBEDDED_RECOGNISER_MODEL: &[u8] =
+    include_bytes!("../../../models/recogniser/recogniser.onnx");
+const EMBEDDED_RECOGNISER_NAME: &str = "built-in models/recogniser/recogniser.onnx";
 
 /// Loads a model the same way for both: a configured file must load (else the start fails);
 /// with none configured the built-in copy is loaded (`load(None)`), and if that fails (e.g. no
@@ -119,6 +123,29 @@ fn with_models(service: GraspService, settings: &Settings) -> Result<GraspServic
             "grasp-type model loaded"
         );
         service = service.with_grasp_type_model(Arc::new(model));
+    }
+    if let Some(model) = load_model(
+        "recogniser",
+        settings.recogniser_model.as_deref(),
+        "hints.object is refused",
+        |path| {
+            init_onnx_runtime(runtime)?;
+            match path {
+                Some(p) => RecognitionModel::load(p, settings.model_threads),
+                None => RecognitionModel::from_bytes(
+                    EMBEDDED_RECOGNISER_MODEL,
+                    EMBEDDED_RECOGNISER_NAME,
+                    settings.model_threads,
+                ),
+            }
+        },
+    )? {
+        tracing::info!(
+            source = %model.path().display(),
+            classes = model.classes().len(),
+            "recogniser loaded"
+        );
+        service = service.with_recogniser(Arc::new(model));
     }
     if let Some(model) = load_model(
         "tactile model",

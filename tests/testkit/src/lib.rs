@@ -19,6 +19,7 @@
 pub mod render;
 pub mod rgbd;
 pub mod sample;
+pub mod texture;
 pub mod view;
 pub mod ycb;
 

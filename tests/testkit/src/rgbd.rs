@@ -1,8 +1,9 @@
 //! RGB-D frames of YCB objects on a table, made by ray casting: one ray per pixel of a pinhole
 //! camera in the convention of ROS `CameraInfo` (pixel centres at integer (u, v), the ray of
 //! (u, v) along `((u − cx)/fx, (v − cy)/fy, 1)` in the optical frame x right, y down,
-//! z forward), depth along the optical axis, a flat colour per object shaded by the angle to
-//! the camera, and a ground-truth label per pixel.
+//! z forward), depth along the optical axis, a flat colour per object (or its scanned texture,
+//! [`SceneObject::scanned`]) shaded by the angle to the camera, and a ground-truth label per
+//! pixel.
 //!
 //! ```no_run
 //! use graspd_testkit::rgbd::{RgbdScene, SceneObject};
@@ -13,6 +14,7 @@
 //! ```
 
 use crate::render::{Camera, Intrinsics, gaussian};
+use crate::texture::{ObjectTexture, texture};
 use crate::ycb::{Object, mesh, mesh_aabb};
 use crate::{Result, TriMesh};
 use image::{ExtendedColorType, ImageEncoder, codecs::png::PngEncoder};
@@ -31,6 +33,8 @@ pub struct SceneObject {
     pub x: f64,
     pub y: f64,
     pub color: [u8; 3],
+    /// Show the scan's texture map instead of `color` (where the object has one).
+    pub scanned: bool,
 }
 
 impl SceneObject {
@@ -40,6 +44,15 @@ impl SceneObject {
             x,
             y,
             color,
+            scanned: false,
+        }
+    }
+
+    /// The object with its scanned texture (the chips can, which has none, in grey).
+    pub fn scanned(object: Object, x: f64, y: f64) -> Self {
+        Self {
+            scanned: true,
+            ..Self::new(object, x, y, [150, 150, 150])
         }
     }
 }
@@ -91,6 +104,17 @@ impl RgbdScene {
             .iter()
             .map(|o| mesh(o.object))
             .collect::<Result<_>>()?;
+        let textures: Vec<Option<Arc<ObjectTexture>>> = self
+            .objects
+            .iter()
+            .map(|o| {
+                if o.scanned {
+                    texture(o.object)
+                } else {
+                    Ok(None)
+                }
+            })
+            .collect::<Result<_>>()?;
         let offsets: Vec<Vector3<f64>> = self
             .objects
             .iter()
@@ -119,8 +143,8 @@ impl RgbdScene {
                 let ray_cam = Vector3::new((u as f64 - k.cx) / k.fx, (v as f64 - k.cy) / k.fy, 1.0);
                 let len = ray_cam.norm();
                 let dir = rot * ray_cam / len;
-                // (range, normal, label): label 0 = table, k + 1 = object k.
-                let mut best: Option<(f64, Vector3<f64>, i32)> = None;
+                // (range, normal, label, triangle): label 0 = table, k + 1 = object k.
+                let mut best: Option<(f64, Vector3<f64>, i32, u32)> = None;
                 for (j, (m, off)) in meshes.iter().zip(&offsets).enumerate() {
                     let local = o - off;
                     let ray = Ray::new(
@@ -128,18 +152,18 @@ impl RgbdScene {
                         Vector::new(dir.x, dir.y, dir.z),
                     );
                     if let Some(hit) = m.cast_local_ray_and_get_normal(&ray, 10.0, false)
-                        && best.is_none_or(|(t, _, _)| hit.time_of_impact < t)
+                        && best.is_none_or(|(t, _, _, _)| hit.time_of_impact < t)
                     {
                         let nn = Vector3::new(hit.normal.x, hit.normal.y, hit.normal.z);
-                        best = Some((hit.time_of_impact, nn, j as i32 + 1));
+                        best = Some((hit.time_of_impact, nn, j as i32 + 1, hit.subshape));
                     }
                 }
                 if dir.z < -1e-12 && o.z > 0.0 {
                     let t = -o.z / dir.z;
                     let p = o + dir * t;
                     let h = self.table_half_extent;
-                    if p.x.abs() <= h && p.y.abs() <= h && best.is_none_or(|(tb, _, _)| t < tb) {
-                        best = Some((t, Vector3::z(), 0));
+                    if p.x.abs() <= h && p.y.abs() <= h && best.is_none_or(|(tb, _, _, _)| t < tb) {
+                        best = Some((t, Vector3::z(), 0, 0));
                     }
                 }
                 let noise = if self.depth_noise_sigma > 0.0 {
@@ -149,14 +173,20 @@ impl RgbdScene {
                 };
                 let drop = self.dropout > 0.0 && rng.random::<f64>() < self.dropout;
                 match best {
-                    Some((t, nn, label)) => {
+                    Some((t, nn, label, triangle)) => {
+                        let k = label as usize;
                         let base = if label == 0 {
-                            self.table_color
+                            self.table_color.map(f64::from)
                         } else {
-                            self.objects[label as usize - 1].color
+                            let scan = textures[k - 1].as_ref().and_then(|tex| {
+                                // The hit in the mesh's own frame.
+                                let p = o - offsets[k - 1] + dir * t;
+                                tex.colour(self.objects[k - 1].object, triangle, &p)
+                            });
+                            scan.unwrap_or(self.objects[k - 1].color.map(f64::from))
                         };
                         let shade = 0.55 + 0.45 * nn.dot(&dir).abs();
-                        rgb.extend(base.iter().map(|&c| (c as f64 * shade).round() as u8));
+                        rgb.extend(base.iter().map(|&c| (c * shade).round().min(255.0) as u8));
                         let z = t / len + noise;
                         depth.push(if drop { 0.0 } else { z as f32 });
                         labels.push(label);

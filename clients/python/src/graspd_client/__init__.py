@@ -443,16 +443,22 @@ class Client:
     def plan_rgbd(self, color, depth, fx, fy, cx, cy, hand: str = "parallel_gripper",
                   seed: int = 0, camera_to_world=None,
                   extra_views: Sequence[plan_pb2.RgbdFrame] = (),
+                  object: Optional[str] = None,
                   **kwargs) -> plan_pb2.PlanGraspResponse:
         """Plans on an RGB-D frame (see ``rgbd_message``). ``extra_views``: further frames of the
         same scene, each built by ``rgbd_message`` with its ``camera_to_world`` (as this frame
-        then needs too); graspd adds what they see of the target object to this frame's points."""
+        then needs too); graspd adds what they see of the target object to this frame's points.
+        ``object``: plan for the object graspd's recogniser takes for this name ("apple"); a
+        name it does not know, or no such object in view, raises ``grpc.RpcError`` with
+        NOT_FOUND naming the objects found."""
         frame = rgbd_message(color, depth, fx, fy, cx, cy,
                              color_encoding=kwargs.pop("color_encoding", "rgb8"),
                              depth_scale=kwargs.pop("depth_scale", 0.0),
                              camera_to_world=camera_to_world)
         request = plan_pb2.PlanGraspRequest(rgbd=frame)
         request.extra_views.extend(extra_views)
+        if object is not None:
+            request.hints.object = object
         return self.plan(
             self._request(request, hand, seed,
                           kwargs.pop("grasp_type", None), None, None, None, False)

@@ -3,7 +3,8 @@
 //!
 //! 1. the VOCUS2 saliency map ([`super::saliency`]);
 //! 2. depth to points, support-plane removal, object clusters and the target
-//!    ([`super::segmentation`]: the caller's pixel or box, else the most salient object);
+//!    ([`super::segmentation`]: the caller's pixel or box, the object the recogniser takes for
+//!    the caller's name ([`super::recognition`]), else the most salient object);
 //! 3. the ROI: the mean-shift region of highest mean saliency, intersected with the target's
 //!    pixels ([`super::roi`]);
 //! 4. with a grasp-type model: the six probability maps, P(s|O) over the ROI (Eq 4.3), and the
@@ -18,13 +19,16 @@ use super::depth_to_cloud::{CloudFrame, depth_to_cloud};
 use super::grasp_type::{
     GraspTypeModel, TypeMaps, attention_pixel, choose_type, type_probabilities,
 };
+use super::recognition::{NotFound, RecognisedObject, RecognitionModel, find_named, recognise};
 use super::rgbd::DecodedFrame;
 use super::roi::{RegionParams, mask_box, region_of_interest, salient_regions};
 use super::saliency::{SaliencyParams, saliency_map};
-use super::segmentation::{SegmentationParams, TargetChoice, TargetHint, segment};
+use super::segmentation::{
+    Segmentation, SegmentationParams, TargetChoice, TargetHint, segment, segment_objects,
+};
 use crate::GraspType;
 use crate::cloud::{Plane, PointCloud};
-use crate::error::FieldError;
+use crate::error::{FieldError, PlanError};
 use nalgebra::{Isometry3, Point3};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -52,6 +56,15 @@ pub struct TypeDetection {
     pub maps: TypeMaps,
 }
 
+/// The networks perception runs, where configured.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PerceptionModels<'a> {
+    /// The grasp-type network (ch. 4.2.2); without it the planner's geometric rule decides.
+    pub grasp_type: Option<&'a GraspTypeModel>,
+    /// The recogniser (§3.2.1); without it `hints.object` is refused.
+    pub recogniser: Option<&'a RecognitionModel>,
+}
+
 /// Seconds per step.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct PerceptionTimings {
@@ -59,6 +72,10 @@ pub struct PerceptionTimings {
     pub decode: f64,
     pub saliency: f64,
     pub segmentation: f64,
+    /// Running the recogniser on the objects in view (`hints.object` only; part of
+    /// `segmentation` too).
+    #[serde(default)]
+    pub recognition: f64,
     pub roi: f64,
     pub grasp_type: f64,
     pub total: f64,
@@ -74,6 +91,8 @@ pub struct GraspInformation {
     pub plane: Option<Plane>,
     /// Object clusters found.
     pub objects: usize,
+    /// What the recogniser took each of them for (`hints.object` only), in cluster order.
+    pub recognised: Vec<RecognisedObject>,
     pub target_choice: TargetChoice,
     /// The target's pixel mask (row-major, the frame's size).
     pub object_mask: Vec<bool>,
@@ -93,27 +112,29 @@ pub struct GraspInformation {
     pub timings: PerceptionTimings,
 }
 
-/// Extracts Ω from a decoded frame (see the module docs). `model`: the grasp-type network, if
-/// configured; `realisable`: the types the hand can realise (s* is chosen among them);
-/// `support_plane`: a plane the caller knows, in the output frame.
+/// Extracts Ω from a decoded frame (see the module docs). `models`: the networks configured;
+/// `realisable`: the types the hand can realise (s* is chosen among them); `support_plane`: a
+/// plane the caller knows, in the output frame.
 ///
 /// Errors name the field: `hints.attention_pixel` / `hints.region` outside the image or on no
-/// object, `rgbd.depth` when no object stands in view.
+/// object, `rgbd.depth` when no object stands in view, `hints.object` (not found) for a name
+/// the recogniser does not know or no object in view is taken for.
 pub fn grasp_information(
     frame: &DecodedFrame,
     hint: TargetHint,
     support_plane: Option<Plane>,
-    model: Option<&GraspTypeModel>,
+    models: PerceptionModels<'_>,
     realisable: &[GraspType],
     params: &InformationParams,
-) -> Result<GraspInformation, FieldError> {
+) -> Result<GraspInformation, PlanError> {
     let t_start = Instant::now();
     let (w, h) = (frame.width, frame.height);
     if frame.valid_depth == 0 {
         return Err(FieldError::new(
             "rgbd.depth",
             "no pixel has a valid depth (all 0, NaN or infinite)",
-        ));
+        )
+        .into());
     }
 
     let t = Instant::now();
@@ -122,13 +143,27 @@ pub fn grasp_information(
 
     let t = Instant::now();
     let cloud = depth_to_cloud(frame, CloudFrame::World);
-    let seg = segment(
-        &cloud,
-        hint,
-        Some(&saliency.data),
-        support_plane,
-        &params.segmentation,
-    )?;
+    let mut recognised = Vec::new();
+    let mut t_recognition = 0.0;
+    let seg = match (&hint, models.recogniser) {
+        (TargetHint::Object(name), Some(recogniser)) => {
+            let (plane, clusters) = segment_objects(&cloud, support_plane, &params.segmentation)?;
+            let t = Instant::now();
+            recognised = recognise(recogniser, frame, &cloud, &clusters, plane.as_ref())
+                .map_err(|e| FieldError::new("hints.object", e.to_string()))?;
+            t_recognition = t.elapsed().as_secs_f64();
+            let k = find_named(name, recogniser.classes(), &recognised)
+                .map_err(|NotFound(e)| PlanError::NotFound(e))?;
+            Segmentation::with_target(&cloud, plane, clusters, k, TargetChoice::Object)
+        }
+        _ => segment(
+            &cloud,
+            hint.clone(),
+            Some(&saliency.data),
+            support_plane,
+            &params.segmentation,
+        )?,
+    };
     let t_segmentation = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
@@ -141,7 +176,7 @@ pub fn grasp_information(
 
     let t = Instant::now();
     let mut model_error = None;
-    let detection = match model {
+    let detection = match models.grasp_type {
         None => None,
         Some(m) => match m.infer(frame) {
             Ok(maps) => {
@@ -181,6 +216,7 @@ pub fn grasp_information(
         object: seg.object,
         plane: seg.plane,
         objects: seg.clusters.len(),
+        recognised,
         target_choice: seg.choice,
         object_mask: seg.mask,
         roi,
@@ -195,6 +231,7 @@ pub fn grasp_information(
             decode: 0.0,
             saliency: t_saliency,
             segmentation: t_segmentation,
+            recognition: t_recognition,
             roi: t_roi,
             grasp_type: t_type,
             total: t_start.elapsed().as_secs_f64(),
@@ -255,6 +292,9 @@ pub struct PerceptionReport {
     pub fused_views: usize,
     #[serde(default)]
     pub fused_points: usize,
+    /// What the recogniser took each object in view for (`hints.object`).
+    #[serde(default)]
+    pub recognised: Vec<RecognisedObject>,
     /// The attention pixel (from the caller's pixel or the model), when there is one.
     pub attention_pixel: Option<[f64; 2]>,
     pub timings: PerceptionTimings,
@@ -281,6 +321,7 @@ impl GraspInformation {
             object_points: self.object.len(),
             fused_views: 0,
             fused_points: 0,
+            recognised: self.recognised.clone(),
             attention_pixel: self.attention_pixel.map(|(u, v)| [u, v]),
             timings: self.timings,
             probability_maps: self

@@ -10,6 +10,8 @@
 //!   attention point.
 //! - [`saliency`]: the VOCUS2 saliency map (ch. 4.2.1); the most salient object is the default
 //!   target.
+//! - [`recognition`]: the object by name (§3.2.1): a small CNN says what each segmented object
+//!   is, so that `hints.object` can name the target.
 //! - [`segmentation`]: support-plane removal, Euclidean clustering and the choice of the target
 //!   object (hint pixel, hint box, saliency, image centre).
 //! - [`roi`]: mean-shift regions of the saliency map; the ROI.
@@ -24,6 +26,7 @@
 pub mod depth_to_cloud;
 pub mod grasp_type;
 pub mod information;
+pub mod recognition;
 pub mod rgbd;
 pub mod rgbd_wire;
 pub mod roi;
@@ -37,9 +40,10 @@ pub use grasp_type::{
     resized_planes, type_probabilities,
 };
 pub use information::{
-    GraspInformation, InformationParams, PerceptionReport, PerceptionTimings, ProbabilityMaps,
-    TypeDetection, grasp_information,
+    GraspInformation, InformationParams, PerceptionModels, PerceptionReport, PerceptionTimings,
+    ProbabilityMaps, TypeDetection, grasp_information,
 };
+pub use recognition::{RecognisedObject, RecognitionModel};
 pub use rgbd::{
     CameraIntrinsics, ColorEncoding, DecodedFrame, DepthEncoding, ImageData, RgbdFrame, RgbdLimits,
 };

@@ -62,7 +62,7 @@ impl Default for SegmentationParams {
 }
 
 /// How the caller points at the object.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub enum TargetHint {
     /// No hint: the most salient cluster if a saliency map is given, else the most central.
     #[default]
@@ -76,6 +76,9 @@ pub enum TargetHint {
         u_max: u32,
         v_max: u32,
     },
+    /// The object the recogniser takes for this name (`hints.object`, [`super::recognition`]);
+    /// [`segment`] alone cannot serve it.
+    Object(String),
 }
 
 /// What decided the target.
@@ -84,6 +87,7 @@ pub enum TargetHint {
 pub enum TargetChoice {
     Pixel,
     Region,
+    Object,
     Saliency,
     ImageCentre,
 }
@@ -94,6 +98,7 @@ impl TargetChoice {
         match self {
             Self::Pixel => "pixel",
             Self::Region => "region",
+            Self::Object => "object",
             Self::Saliency => "saliency",
             Self::ImageCentre => "image_centre",
         }
@@ -101,9 +106,15 @@ impl TargetChoice {
 
     /// The inverse of [`Self::name`].
     pub fn from_name(name: &str) -> Option<Self> {
-        [Self::Pixel, Self::Region, Self::Saliency, Self::ImageCentre]
-            .into_iter()
-            .find(|c| c.name() == name)
+        [
+            Self::Pixel,
+            Self::Region,
+            Self::Object,
+            Self::Saliency,
+            Self::ImageCentre,
+        ]
+        .into_iter()
+        .find(|c| c.name() == name)
     }
 }
 
@@ -228,7 +239,7 @@ pub fn segment(
     params: &SegmentationParams,
 ) -> Result<Segmentation, FieldError> {
     let (w, h) = (cloud.width, cloud.height);
-    check_hint(hint, w, h)?;
+    check_hint(&hint, w, h)?;
     if let Some(s) = saliency
         && s.len() != w * h
     {
@@ -237,6 +248,20 @@ pub fn segment(
             format!("{} values for a {w}×{h} frame", s.len()),
         ));
     }
+    let (plane, clusters) = segment_objects(cloud, support_plane, params)?;
+    let (target, choice) = choose_target(cloud, &clusters, hint, saliency)?;
+    Ok(Segmentation::with_target(
+        cloud, plane, clusters, target, choice,
+    ))
+}
+
+/// The support plane and the objects on it, as [`Cluster`]s (steps 1 and 2 of the module
+/// docs). Errors name `rgbd.depth` when nothing stands on the plane.
+pub fn segment_objects(
+    cloud: &PixelCloud,
+    support_plane: Option<Plane>,
+    params: &SegmentationParams,
+) -> Result<(Option<Plane>, Vec<Cluster>), FieldError> {
     let points = &cloud.cloud.points;
     let (plane, lists, above) = objects_on_plane(points, support_plane, params);
     if lists.is_empty() {
@@ -257,7 +282,7 @@ pub fn segment(
             ),
         ));
     }
-    let clusters: Vec<Cluster> = lists
+    let clusters = lists
         .into_iter()
         .map(|indices| {
             let (mut su, mut sv) = (0.0, 0.0);
@@ -273,28 +298,42 @@ pub fn segment(
             }
         })
         .collect();
-    let (target, choice) = choose_target(cloud, &clusters, hint, saliency)?;
-    let c = &clusters[target];
-    let object = PointCloud::new(c.indices.iter().map(|&i| points[i]).collect());
-    let object_pixels: Vec<u32> = c.indices.iter().map(|&i| cloud.pixels[i]).collect();
-    let mut mask = vec![false; w * h];
-    for &p in &object_pixels {
-        mask[p as usize] = true;
-    }
-    Ok(Segmentation {
-        plane,
-        clusters,
-        target,
-        choice,
-        object,
-        object_pixels,
-        mask,
-    })
+    Ok((plane, clusters))
 }
 
-fn check_hint(hint: TargetHint, w: usize, h: usize) -> Result<(), FieldError> {
-    match hint {
+impl Segmentation {
+    /// The segmentation with `clusters[target]` as the target object.
+    pub fn with_target(
+        cloud: &PixelCloud,
+        plane: Option<Plane>,
+        clusters: Vec<Cluster>,
+        target: usize,
+        choice: TargetChoice,
+    ) -> Self {
+        let c = &clusters[target];
+        let points = &cloud.cloud.points;
+        let object = PointCloud::new(c.indices.iter().map(|&i| points[i]).collect());
+        let object_pixels: Vec<u32> = c.indices.iter().map(|&i| cloud.pixels[i]).collect();
+        let mut mask = vec![false; cloud.width * cloud.height];
+        for &p in &object_pixels {
+            mask[p as usize] = true;
+        }
+        Self {
+            plane,
+            clusters,
+            target,
+            choice,
+            object,
+            object_pixels,
+            mask,
+        }
+    }
+}
+
+fn check_hint(hint: &TargetHint, w: usize, h: usize) -> Result<(), FieldError> {
+    match *hint {
         TargetHint::Auto => Ok(()),
+        TargetHint::Object(_) => Ok(()),
         TargetHint::Pixel { u, v } => {
             if (u as usize) < w && (v as usize) < h {
                 Ok(())
@@ -375,6 +414,11 @@ fn choose_target(
         best
     };
     match hint {
+        TargetHint::Object(_) => Err(FieldError::new(
+            "hints.object",
+            "naming the object needs the recogniser, and graspd runs without one \
+             (--recogniser-model none, or the model failed to load)",
+        )),
         TargetHint::Pixel { u, v } => {
             let target = (v as usize * cloud.width + u as usize) as u32;
             let (k, _) = argmax(&|c: &Cluster| {

@@ -11,7 +11,7 @@
 
 use crate::hand_store;
 use graspd_core::HandCatalog;
-use graspd_core::perception::GraspTypeModel;
+use graspd_core::perception::{GraspTypeModel, RecognitionModel};
 use graspd_core::planning::KinematicModel;
 use graspd_core::tactile::{SensorCatalog, TactileModel};
 use std::collections::{BTreeMap, BTreeSet};
@@ -54,6 +54,8 @@ struct Inner {
     grasp_type_model: Option<Arc<GraspTypeModel>>,
     /// The tactile LSTM detector (method.md §5), when loaded.
     tactile_model: Option<Arc<TactileModel>>,
+    /// The recogniser of `hints.object` (§3.2.1), when loaded.
+    recogniser: Option<Arc<RecognitionModel>>,
     /// Tactile calibrations by name (issue 16).
     calibrations: RwLock<calibrations::Calibrations>,
 }
@@ -82,6 +84,7 @@ impl GraspService {
                 tactile_sessions: Arc::new(AtomicUsize::new(0)),
                 grasp_type_model: None,
                 tactile_model: None,
+                recogniser: None,
                 calibrations: RwLock::default(),
             }),
         }
@@ -93,6 +96,14 @@ impl GraspService {
         Arc::get_mut(&mut self.inner)
             .expect("the model is set at start, before the service is shared")
             .grasp_type_model = Some(model);
+        self
+    }
+
+    /// Sets the recogniser that serves `hints.object` (at start, before the service is cloned).
+    pub fn with_recogniser(mut self, model: Arc<RecognitionModel>) -> Self {
+        Arc::get_mut(&mut self.inner)
+            .expect("the model is set at start, before the service is shared")
+            .recogniser = Some(model);
         self
     }
 

@@ -6,8 +6,8 @@ use super::{
 };
 use graspd_core::perception::segmentation::SegmentationParams;
 use graspd_core::perception::{
-    DecodedFrame, FusionReport, GraspInformation, InformationParams, RgbdFrame, RgbdLimits,
-    fuse_views, grasp_information,
+    DecodedFrame, FusionReport, GraspInformation, InformationParams, PerceptionModels, RgbdFrame,
+    RgbdLimits, fuse_views, grasp_information,
 };
 use graspd_core::plan_overlay::draw_overlay;
 use graspd_core::plan_scene::{plan_scene, to_glb};
@@ -213,12 +213,15 @@ impl GraspService {
         let decoded = self.decode_frame(frame, "rgbd")?;
         let decode_seconds = t.elapsed().as_secs_f64();
         let target = image_hints.target()?;
-        let model = self.inner.grasp_type_model.as_deref();
+        let models = PerceptionModels {
+            grasp_type: self.inner.grasp_type_model.as_deref(),
+            recogniser: self.inner.recogniser.as_deref(),
+        };
         let mut info = grasp_information(
             &decoded,
             target,
             hints.support_plane,
-            model,
+            models,
             &hand.realisable_types(),
             &InformationParams::default(),
         )?;

@@ -14,7 +14,7 @@
 //! Sample i is drawn from seed `S · 1 000 003 + i`, so the output does not depend on `--threads`.
 
 use clap::Parser;
-use graspd_grasp_type_data::{Frame, Sample, labels, sample};
+use graspd_model_data::{Frame, Sample, labels, npy_header, sample};
 use image::{ExtendedColorType, ImageEncoder, codecs::png::PngEncoder};
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -46,24 +46,6 @@ struct Args {
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
-}
-
-/// A `.npy` (format 1.0) header for a C-order array.
-fn npy_header(descr: &str, shape: &[usize]) -> Vec<u8> {
-    let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
-    let mut dict = format!(
-        "{{'descr': '{descr}', 'fortran_order': False, 'shape': ({},), }}",
-        dims.join(", ")
-    );
-    // Magic (6) + version (2) + length (2) + dict + '\n' is a multiple of 64.
-    while (10 + dict.len() + 1) % 64 != 0 {
-        dict.push(' ');
-    }
-    dict.push('\n');
-    let mut h = b"\x93NUMPY\x01\x00".to_vec();
-    h.extend_from_slice(&(dict.len() as u16).to_le_bytes());
-    h.extend_from_slice(dict.as_bytes());
-    h
 }
 
 fn create(path: &Path) -> Result<BufWriter<File>, String> {

@@ -7,14 +7,17 @@
 //! (`$ORT_DYLIB_PATH`, set by `make test`) and the YCB meshes of ../shared/testdata.
 
 use graspd_core::perception::GraspTypeModel;
-use graspd_grasp_type_data::{labels::NAMES, sample};
+use graspd_model_data::{labels::NAMES, sample};
 use std::path::PathBuf;
 
 const TEST_SEED: u64 = 3;
 const SCENES: usize = 24;
 
 fn model_path() -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../grasp_type.onnx"))
+    PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../grasp_type/grasp_type.onnx"
+    ))
 }
 
 #[test]
@@ -55,7 +58,7 @@ fn shipped_model_finds_the_grasp_types_of_held_out_scenes() {
 /// object's true pixels (Eq 4.3), against the types the label rules give the object.
 #[test]
 fn shipped_model_types_the_table_5_2_objects_as_the_rules_do() {
-    use graspd_grasp_type_data::labels::{PartDims, part_labels};
+    use graspd_model_data::labels::{PartDims, part_labels};
     use graspd_testkit::Object;
     use graspd_testkit::rgbd::{RgbdScene, SceneObject};
     use graspd_testkit::ycb::{mesh, mesh_aabb};

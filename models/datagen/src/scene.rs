@@ -9,6 +9,7 @@
 //! sensor. Every object pixel is labelled by [`crate::labels`].
 
 use crate::labels::{PartDims, PartLabels, part_labels};
+use graspd_testkit::texture::ObjectTexture;
 use graspd_testkit::{Camera, Object, mesh};
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use parry3d_f64::math::Vector;
@@ -21,7 +22,7 @@ use std::sync::Arc;
 
 /// How a surface is coloured between its two colours.
 #[derive(Debug, Clone, Copy)]
-enum Texture {
+pub enum Texture {
     Plain,
     /// Bands along a local axis, `period` m.
     Stripes {
@@ -110,6 +111,33 @@ fn random_color(rng: &mut ChaCha8Rng) -> [f64; 3] {
     ]
 }
 
+/// How a part's surface is coloured.
+#[derive(Clone)]
+pub enum Appearance {
+    /// Between two colours by a procedural texture.
+    Painted {
+        colors: [[f64; 3]; 2],
+        texture: Texture,
+    },
+    /// The YCB scan's own texture map (the part's shape is the object's mesh), each channel
+    /// times `gain` (a sensor's white balance).
+    Scanned {
+        object: Object,
+        texture: Arc<ObjectTexture>,
+        gain: [f64; 3],
+    },
+}
+
+impl Appearance {
+    /// Two random colours and a random texture.
+    pub fn random_paint(rng: &mut ChaCha8Rng) -> Self {
+        Appearance::Painted {
+            colors: [random_color(rng), random_color(rng)],
+            texture: Texture::random(rng),
+        }
+    }
+}
+
 /// One rigid part of an object.
 struct Part {
     shape: Arc<dyn Shape>,
@@ -119,9 +147,10 @@ struct Part {
     /// World bounding sphere, for a cheap rejection per ray.
     center: Point3<f64>,
     radius: f64,
-    colors: [[f64; 3]; 2],
-    texture: Texture,
+    appearance: Appearance,
     labels: PartLabels,
+    /// The scene object it belongs to (1-based, as in [`Frame::objects`]).
+    object: u8,
 }
 
 impl Part {
@@ -129,8 +158,8 @@ impl Part {
         shape: Arc<dyn Shape>,
         pose: Isometry3<f64>,
         dims: PartDims,
-        colors: [[f64; 3]; 2],
-        texture: Texture,
+        appearance: Appearance,
+        object: u8,
     ) -> Self {
         let bs = shape.compute_local_bounding_sphere();
         let c = bs.center();
@@ -141,13 +170,40 @@ impl Part {
             labels: part_labels(&dims),
             shape,
             pose,
-            colors,
-            texture,
+            appearance,
+            object,
         }
     }
 
-    /// Distance along the world ray and the world normal of the first hit.
-    fn cast(&self, o: &Point3<f64>, dir: &Vector3<f64>, max: f64) -> Option<(f64, Vector3<f64>)> {
+    /// The colour (0…255, before shading) at world point `p` on triangle `triangle`.
+    fn colour(&self, p: &Point3<f64>, triangle: u32) -> [f64; 3] {
+        let local = self.inverse * p;
+        match &self.appearance {
+            Appearance::Painted { colors, texture } => {
+                let w = texture.weight(&local);
+                [0, 1, 2].map(|c| colors[0][c] * (1.0 - w) + colors[1][c] * w)
+            }
+            Appearance::Scanned {
+                object,
+                texture,
+                gain,
+            } => {
+                let t = texture
+                    .colour(*object, triangle, &local)
+                    .unwrap_or([128.0; 3]);
+                [0, 1, 2].map(|c| t[c] * gain[c])
+            }
+        }
+    }
+
+    /// Distance along the world ray, the world normal and the triangle (of a mesh) of the
+    /// first hit.
+    fn cast(
+        &self,
+        o: &Point3<f64>,
+        dir: &Vector3<f64>,
+        max: f64,
+    ) -> Option<(f64, Vector3<f64>, u32)> {
         // Ray–sphere rejection.
         let oc = self.center - o;
         let along = oc.dot(dir);
@@ -159,13 +215,16 @@ impl Part {
         let ray = Ray::new(Vector::new(lo.x, lo.y, lo.z), Vector::new(ld.x, ld.y, ld.z));
         let hit = self.shape.cast_local_ray_and_get_normal(&ray, max, true)?;
         let n = self.pose.rotation * Vector3::new(hit.normal.x, hit.normal.y, hit.normal.z);
-        Some((hit.time_of_impact, n))
+        Some((hit.time_of_impact, n, hit.subshape))
     }
 }
 
 /// A random scene.
 pub struct Scene {
     parts: Vec<Part>,
+    /// What each scene object is (index k − 1 for object k of [`Frame::objects`]): a YCB
+    /// object, or `None` for a procedural one.
+    pub identities: Vec<Option<Object>>,
     table_half_extent: f64,
     table_colors: [[f64; 3]; 2],
     table_texture: Texture,
@@ -190,15 +249,34 @@ fn placed(x: f64, y: f64, z: f64, yaw: f64, tilt: UnitQuaternion<f64>) -> Isomet
 }
 
 impl Scene {
-    /// Draws a scene from `seed` (the same seed gives the same scene).
+    /// Draws a scene from `seed` (the same seed gives the same scene): the grasp-type data's
+    /// 1–5 objects, each part painted at random.
     pub fn random(seed: u64) -> graspd_testkit::Result<Self> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let count = rng.random_range(1..=5usize);
+        Self::assemble(
+            rng,
+            count,
+            |rng| Ok((random_object(rng)?, None)),
+            |rng, _| Appearance::random_paint(rng),
+        )
+    }
+
+    /// Places `count` objects drawn by `draw` (its parts and its identity) without overlap
+    /// within ±18 cm, paints each part with `paint`, and draws the table, the light and the
+    /// camera (module docs).
+    pub(crate) fn assemble(
+        mut rng: ChaCha8Rng,
+        count: usize,
+        mut draw: impl FnMut(&mut ChaCha8Rng) -> graspd_testkit::Result<(ObjectParts, Option<Object>)>,
+        mut paint: impl FnMut(&mut ChaCha8Rng, Option<Object>) -> Appearance,
+    ) -> graspd_testkit::Result<Self> {
         let mut parts = Vec::new();
+        let mut identities = Vec::new();
         // Footprint circles (x, y, r) of the objects placed so far.
         let mut placed_at: Vec<(f64, f64, f64)> = Vec::new();
         for _ in 0..count {
-            let object = random_object(&mut rng)?;
+            let (object, identity) = draw(&mut rng)?;
             let r = object.footprint;
             let spot = (0..60).find_map(|_| {
                 let (x, y) = (rng.random_range(-0.18..0.18), rng.random_range(-0.18..0.18));
@@ -211,12 +289,13 @@ impl Scene {
             });
             let Some((x, y)) = spot else { continue };
             placed_at.push((x, y, r));
+            identities.push(identity);
+            let id = identities.len() as u8;
             let yaw = rng.random_range(0.0..TAU);
             let base = placed(x, y, 0.0, yaw, UnitQuaternion::identity());
             for (shape, local, dims) in object.parts {
-                let colors = [random_color(&mut rng), random_color(&mut rng)];
-                let texture = Texture::random(&mut rng);
-                parts.push(Part::new(shape, base * local, dims, colors, texture));
+                let appearance = paint(&mut rng, identity);
+                parts.push(Part::new(shape, base * local, dims, appearance, id));
             }
         }
         // Look at the objects' centroid (or the table centre when none fits).
@@ -247,6 +326,7 @@ impl Scene {
         };
         Ok(Self {
             parts,
+            identities,
             table_half_extent: rng.random_range(0.3..0.8),
             table_colors: [random_color(&mut rng), random_color(&mut rng)],
             table_texture: Texture::random(&mut rng),
@@ -291,6 +371,7 @@ impl Scene {
             rgb: vec![0; 3 * n],
             depth: vec![0.0; n],
             labels: vec![0; n],
+            objects: vec![0; n],
             camera_to_world: Isometry3::from_parts(
                 Translation3::from(o.coords),
                 UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rot)),
@@ -302,13 +383,14 @@ impl Scene {
                 let ray_cam = Vector3::new((u as f64 - k.cx) / k.fx, (v as f64 - k.cy) / k.fy, 1.0);
                 let len = ray_cam.norm();
                 let dir = rot * ray_cam / len;
-                let mut best: Option<(f64, Vector3<f64>, usize)> = None;
+                // (range, normal, part + 1 or 0 for the table, triangle)
+                let mut best: Option<(f64, Vector3<f64>, usize, u32)> = None;
                 for (j, p) in self.parts.iter().enumerate() {
                     let max = best.map_or(10.0, |b| b.0);
-                    if let Some((t, nn)) = p.cast(&o, &dir, max)
+                    if let Some((t, nn, tri)) = p.cast(&o, &dir, max)
                         && best.is_none_or(|b| t < b.0)
                     {
-                        best = Some((t, nn, j + 1));
+                        best = Some((t, nn, j + 1, tri));
                     }
                 }
                 if dir.z < -1e-12 {
@@ -316,21 +398,23 @@ impl Scene {
                     let p = o + dir * t;
                     let h = self.table_half_extent;
                     if p.x.abs() <= h && p.y.abs() <= h && best.is_none_or(|b| t < b.0) {
-                        best = Some((t, Vector3::z(), 0));
+                        best = Some((t, Vector3::z(), 0, 0));
                     }
                 }
-                let Some((t, normal, hit)) = best else {
+                let Some((t, normal, hit, triangle)) = best else {
                     let c = self.background;
                     frame.rgb[3 * i..3 * i + 3].copy_from_slice(&c.map(|x| x as u8));
                     continue;
                 };
                 let p = o + dir * t;
-                let (colors, w) = if hit == 0 {
-                    (&self.table_colors, self.table_texture.weight(&p))
+                let colour = if hit == 0 {
+                    let (c, w) = (&self.table_colors, self.table_texture.weight(&p));
+                    [0, 1, 2].map(|k| c[0][k] * (1.0 - w) + c[1][k] * w)
                 } else {
                     let part = &self.parts[hit - 1];
                     frame.labels[i] = part.labels.at(normal.z);
-                    (&part.colors, part.texture.weight(&(part.inverse * p)))
+                    frame.objects[i] = part.object;
+                    part.colour(&p, triangle)
                 };
                 // Shade with the normal facing the camera.
                 let nn = if normal.dot(&dir) > 0.0 {
@@ -343,8 +427,7 @@ impl Scene {
                 let spec = self.specular * reflect.dot(&-dir).max(0.0).powi(self.shininess);
                 let light = self.ambient + self.diffuse * lambert;
                 for (c, out) in frame.rgb[3 * i..3 * i + 3].iter_mut().enumerate() {
-                    let base = colors[0][c] * (1.0 - w) + colors[1][c] * w;
-                    let x = base * light + 255.0 * spec + 2.0 * self.noise(i, c as u64);
+                    let x = colour[c] * light + 255.0 * spec + 2.0 * self.noise(i, c as u64);
                     *out = x.round().clamp(0.0, 255.0) as u8;
                 }
                 let drop = self.uniform(i, 3, 0) < self.dropout;
@@ -357,19 +440,21 @@ impl Scene {
 }
 
 /// A rendered frame: colour, depth along the optical axis (m, 0 = no reading) and the label
-/// byte of [`crate::labels`] per pixel (0 off objects).
+/// byte of [`crate::labels`] and the scene object (1-based, [`Scene::identities`]) per pixel
+/// (0 off objects).
 pub struct Frame {
     pub width: usize,
     pub height: usize,
     pub rgb: Vec<u8>,
     pub depth: Vec<f32>,
     pub labels: Vec<u8>,
+    pub objects: Vec<u8>,
     pub camera_to_world: Isometry3<f64>,
 }
 
 /// An object before placement: its parts in the object's frame (origin on the table, z up) and
 /// the radius of its footprint.
-struct ObjectParts {
+pub(crate) struct ObjectParts {
     parts: Vec<PartSpec>,
     footprint: f64,
 }
@@ -423,22 +508,34 @@ fn half_diagonal(w: f64, d: f64) -> f64 {
     0.5 * (w * w + d * d).sqrt()
 }
 
-fn random_object(rng: &mut ChaCha8Rng) -> graspd_testkit::Result<ObjectParts> {
+/// A YCB object standing on the table, centred on its bounding box.
+pub(crate) fn ycb_object(object: Object) -> graspd_testkit::Result<ObjectParts> {
+    let m = mesh(object)?;
+    let aabb = m.local_aabb();
+    let (lo, hi) = (aabb.mins, aabb.maxs);
+    let ext = [hi.x - lo.x, hi.y - lo.y, hi.z - lo.z];
+    let shift = Translation3::new(-(lo.x + hi.x) / 2.0, -(lo.y + hi.y) / 2.0, -lo.z);
+    let shape: Arc<dyn Shape> = m;
+    let pose = Isometry3::from_parts(shift, UnitQuaternion::identity());
+    Ok(ObjectParts {
+        parts: vec![(shape, pose, PartDims::from_extents_m(ext, ext[2]))],
+        footprint: half_diagonal(ext[0], ext[1]),
+    })
+}
+
+/// A random object: 30 % YCB meshes, the rest procedural ([`random_primitive`]).
+pub(crate) fn random_object(rng: &mut ChaCha8Rng) -> graspd_testkit::Result<ObjectParts> {
     let kind = rng.random_range(0..100);
-    let (parts, footprint): (Vec<PartSpec>, f64) = if kind < 30 {
-        let object = Object::ALL[rng.random_range(0..Object::ALL.len())];
-        let m = mesh(object)?;
-        let aabb = m.local_aabb();
-        let (lo, hi) = (aabb.mins, aabb.maxs);
-        let ext = [hi.x - lo.x, hi.y - lo.y, hi.z - lo.z];
-        let shift = Translation3::new(-(lo.x + hi.x) / 2.0, -(lo.y + hi.y) / 2.0, -lo.z);
-        let shape: Arc<dyn Shape> = m;
-        let pose = Isometry3::from_parts(shift, UnitQuaternion::identity());
-        (
-            vec![(shape, pose, PartDims::from_extents_m(ext, ext[2]))],
-            half_diagonal(ext[0], ext[1]),
-        )
-    } else if kind < 42 {
+    if kind < 30 {
+        ycb_object(Object::ALL[rng.random_range(0..Object::ALL.len())])
+    } else {
+        Ok(random_primitive(rng, kind))
+    }
+}
+
+/// A procedural object of `kind` (30…99: the share of each kind in [`random_object`]'s draw).
+pub(crate) fn random_primitive(rng: &mut ChaCha8Rng, kind: u32) -> ObjectParts {
+    let (parts, footprint): (Vec<PartSpec>, f64) = if kind < 42 {
         let (r, h) = (rng.random_range(0.01..0.06), rng.random_range(0.03..0.25));
         (vec![standing_cylinder(r, h)], r)
     } else if kind < 52 {
@@ -486,5 +583,5 @@ fn random_object(rng: &mut ChaCha8Rng) -> graspd_testkit::Result<ObjectParts> {
         );
         (vec![standing_cylinder(r, h), handle], r + hl)
     };
-    Ok(ObjectParts { parts, footprint })
+    ObjectParts { parts, footprint }
 }

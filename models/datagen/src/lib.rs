@@ -1,9 +1,12 @@
-//! Generated RGB-D tabletop scenes with per-pixel grasp-type labels for training graspd's
-//! grasp-type network (models/grasp_type/MODEL_CARD.md): [`scene`] draws and ray-casts them,
-//! [`labels`] is the label rule set (LABELS.md), [`sample`] turns scene i of a seed into the
-//! network's input exactly as graspd preprocesses a frame.
+//! Generated RGB-D tabletop scenes for training graspd's networks: [`scene`] draws and
+//! ray-casts them. For the grasp-type network (models/grasp_type/MODEL_CARD.md), [`labels`] is
+//! the label rule set (LABELS.md) and [`sample`] turns scene i of a seed into the network's
+//! input exactly as graspd preprocesses a frame; for the recogniser
+//! (models/recogniser/MODEL_CARD.md), [`recognition`] segments and crops cluttered scenes as
+//! graspd does and labels each segment.
 
 pub mod labels;
+pub mod recognition;
 pub mod scene;
 
 use graspd_core::perception::{CameraIntrinsics, DecodedFrame, bilinear_taps, resized_planes};
@@ -98,4 +101,22 @@ pub fn sample(
         full: full.then_some(frame),
         decoded,
     })
+}
+
+/// A `.npy` (format 1.0) header for a C-order array.
+pub fn npy_header(descr: &str, shape: &[usize]) -> Vec<u8> {
+    let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
+    let mut dict = format!(
+        "{{'descr': '{descr}', 'fortran_order': False, 'shape': ({},), }}",
+        dims.join(", ")
+    );
+    // Magic (6) + version (2) + length (2) + dict + '\n' is a multiple of 64.
+    while (10 + dict.len() + 1) % 64 != 0 {
+        dict.push(' ');
+    }
+    dict.push('\n');
+    let mut h = b"\x93NUMPY\x01\x00".to_vec();
+    h.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+    h.extend_from_slice(dict.as_bytes());
+    h
 }
