@@ -22,5 +22,7 @@ for split in "train 3000 11" "val 300 12" "test 500 13 --unseen"; do
 done
 nice "$py" "$here/train.py" --train "$data/train" --val "$data/val" \
 	--test "$data/test" --out "$here" "$@"
+# eval-recogniser runs the model through graspd's ONNX Runtime.
+export ORT_DYLIB_PATH="${ORT_DYLIB_PATH:-$("$root/scripts/fetch-onnxruntime.sh" | tail -n 1)}"
 "$root/target/release/eval-recogniser" --model "$here/recogniser.onnx" --scenes 500 --seed 21 \
 	--unseen | tee "$here/detection.json"
