@@ -21,7 +21,7 @@ use super::grasp_type::{
 };
 use super::recognition::{NotFound, RecognisedObject, RecognitionModel, find_named, recognise};
 use super::rgbd::DecodedFrame;
-use super::roi::{RegionParams, mask_box, region_of_interest, salient_regions};
+use super::roi::{RegionParams, mask_box, region_of_interest, salient_regions_near};
 use super::saliency::{SaliencyParams, saliency_map};
 use super::segmentation::{
     Segmentation, SegmentationParams, TargetChoice, TargetHint, segment, segment_objects,
@@ -167,7 +167,8 @@ pub fn grasp_information(
     let t_segmentation = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let regions = salient_regions(&saliency, &params.regions);
+    // Only the regions over the target matter (the ROI is one of them, intersected with it).
+    let regions = salient_regions_near(&saliency, &params.regions, mask_box(&seg.mask, w));
     let roi = region_of_interest(&regions, w, h, Some(&seg.mask), &params.regions)
         .unwrap_or_else(|| seg.mask.clone());
     let roi_box = mask_box(&roi, w).unwrap_or([0, 0, 0, 0]);

@@ -48,7 +48,10 @@ pub use rgbd::{
     CameraIntrinsics, ColorEncoding, DecodedFrame, DepthEncoding, ImageData, RgbdFrame, RgbdLimits,
 };
 pub use rgbd_wire::{WireImage, camera_pose, sniff_encoding};
-pub use roi::{RegionParams, SalientRegions, mask_box, region_of_interest, salient_regions};
+pub use roi::{
+    RegionParams, SalientRegions, mask_box, region_of_interest, salient_regions,
+    salient_regions_near,
+};
 pub use saliency::{Plane32, SaliencyParams, saliency_map};
 pub use segmentation::{
     Cluster, Segmentation, SegmentationParams, TargetChoice, TargetHint, euclidean_clusters,

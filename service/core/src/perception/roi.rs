@@ -74,6 +74,20 @@ impl SalientRegions {
 
 /// Mean-shift regions of the salient cells of `map` (see the module docs). Deterministic.
 pub fn salient_regions(map: &Plane32, params: &RegionParams) -> SalientRegions {
+    salient_regions_near(map, params, None)
+}
+
+/// [`salient_regions`] seeded only from the salient cells that overlap `window` ([u_min,
+/// v_min, u_max, v_max) pixels): the kernel still reads every salient cell, so each seed there
+/// converges as on the whole map, and the cells outside stay unlabelled (a region's mean
+/// saliency and size are then those of its cells in the window). With the target known, the
+/// ROI only needs the regions over it: a frame with many objects then costs what one object
+/// costs. `None`: every salient cell.
+pub fn salient_regions_near(
+    map: &Plane32,
+    params: &RegionParams,
+    window: Option<[u32; 4]>,
+) -> SalientRegions {
     let cell = params.cell.max(1);
     let (cols, rows) = (map.width.div_ceil(cell), map.height.div_ceil(cell));
     let mut grid = vec![0f32; cols * rows];
@@ -99,7 +113,17 @@ pub fn salient_regions(map: &Plane32, params: &RegionParams) -> SalientRegions {
         .collect();
     let feature =
         |i: usize| -> [f32; 3] { [(i % cols) as f32, (i / cols) as f32, grid[i] * scale] };
-    let feats: Vec<[f32; 3]> = salient.iter().map(|&i| feature(i)).collect();
+    // The seeds: the salient cells overlapping the window.
+    let in_window = |i: usize| {
+        window.is_none_or(|[u0, v0, u1, v1]| {
+            let (c, r) = (i % cols, i / cols);
+            let cell_of = |p: u32| p as usize / cell;
+            (cell_of(u0)..=cell_of(u1.saturating_sub(1))).contains(&c)
+                && (cell_of(v0)..=cell_of(v1.saturating_sub(1))).contains(&r)
+        })
+    };
+    let seeds: Vec<usize> = salient.iter().copied().filter(|&i| in_window(i)).collect();
+    let feats: Vec<[f32; 3]> = seeds.iter().map(|&i| feature(i)).collect();
     let mut is_salient = vec![false; grid.len()];
     for &i in &salient {
         is_salient[i] = true;
@@ -150,7 +174,7 @@ pub fn salient_regions(map: &Plane32, params: &RegionParams) -> SalientRegions {
                 modes.len() - 1
             }
         };
-        labels[salient[k]] = Some(label as u32);
+        labels[seeds[k]] = Some(label as u32);
     }
     let mut sums = vec![0f32; modes.len()];
     let mut cells = vec![0usize; modes.len()];
@@ -293,6 +317,29 @@ mod tests {
             region_of_interest(&r, 160, 120, Some(&far), &params).unwrap(),
             far
         );
+    }
+
+    /// Seeded in a window, the regions over it are those of the whole map; the cells outside
+    /// stay unlabelled.
+    #[test]
+    fn regions_near_a_window_are_those_of_the_whole_map_there() {
+        let map = map_with(&[(16, 16, 32, 0.6), (96, 64, 32, 1.0)], 160, 120);
+        let params = RegionParams::default();
+        let all = salient_regions(&map, &params);
+        let near = salient_regions_near(&map, &params, Some([16, 16, 48, 48]));
+        assert_eq!(near.mean_saliency.len(), 1, "{near:?}");
+        for v in (0..120).step_by(8) {
+            for u in (0..160).step_by(8) {
+                if (16..48).contains(&u) && (16..48).contains(&v) {
+                    assert_eq!(near.label_at(u, v).is_some(), all.label_at(u, v).is_some());
+                } else {
+                    assert_eq!(near.label_at(u, v), None, "({u}, {v})");
+                }
+            }
+        }
+        let k = all.label_at(20, 20).unwrap() as usize;
+        assert_eq!(near.mean_saliency[0], all.mean_saliency[k]);
+        assert_eq!(near.cells[0], all.cells[k]);
     }
 
     #[test]
