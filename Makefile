@@ -3,7 +3,7 @@ CARGO ?= cargo
 # Extra flags for `make run`, e.g. make run ARGS="--rest-addr 127.0.0.1:8081 --log-format json"
 ARGS ?=
 
-.PHONY: build run test fmt lint fuzz models models-grasp-type models-tactile models-recogniser sim-bench sim-stabilize
+.PHONY: build run test fmt lint fuzz models models-grasp-type models-tactile models-recogniser sim-bench sim-stabilize sim-clutter
 
 # The ONNX Runtime library that ort loads at run time (grasp-type model, docs/model-contract.md);
 # `run` and `test` fetch it first with scripts/fetch-onnxruntime.sh.
@@ -75,9 +75,13 @@ models-recogniser:
 # those arguments instead.
 # `make sim-stabilize` runs the tactile closed loop against a constant-force baseline under an
 # added load (graspd-sim stabilize; results in sim-results/).
+# `make sim-clutter` runs reach-to-grasp in clutter, laid out like the dissertation's Table 3.1
+# (graspd-sim clutter: the 2F-85, each of the 12 shared YCB objects named 4 times among 3–6
+# objects, one worker so that the request timings are graspd's own; about a minute; results in
+# sim-results/clutter).
 SIM_ARGS ?=
-sim-bench sim-stabilize: export ORT_DYLIB_PATH = $(CURDIR)/.tools/onnxruntime/libonnxruntime.so.1.31.1
-sim-bench sim-stabilize:
+sim-bench sim-stabilize sim-clutter: export ORT_DYLIB_PATH = $(CURDIR)/.tools/onnxruntime/libonnxruntime.so.1.31.1
+sim-bench sim-stabilize sim-clutter:
 	scripts/fetch-onnxruntime.sh
 	scripts/fetch-mujoco.sh
 	$(CARGO) build --release --bin graspd --bin graspd-sim

@@ -6,7 +6,8 @@
 # 20 trials per cell, placements within ±10 cm: the Table 5.2 objects from a single RGB-D view,
 # all 13 shared objects from a single view, and the Table 5.2 objects from 3 fused views, into
 # sim-results/{table-5-2,all-objects,fused-views}; `stabilize` with no further arguments runs the
-# tactile closed loop twice (Eq 6.9 as printed, and with the session options that stop the drops).
+# tactile closed loop twice (Eq 6.9 as printed, and with the session options that stop the drops);
+# `clutter` reach-to-grasp in clutter into sim-results/clutter.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 hands="$root/../shared/testdata/hands"
@@ -38,6 +39,10 @@ elif [ "$#" -eq 1 ] && [ "$1" = stabilize ]; then
     sim stabilize --hand robotiq_2f85 --trials 10 --seed 0 --out sim-results/stabilize-eq-6-9
     sim stabilize --hand robotiq_2f85 --trials 10 --seed 0 --latch-slip --centroid-slip 20 \
         --max-force 6 --out sim-results/stabilize
+elif [ "$#" -eq 1 ] && [ "$1" = clutter ]; then
+    # Reach-to-grasp in clutter (docs/sim-benchmark.md, Table 3.1's layout); one worker, so that
+    # the request timings are graspd's own.
+    sim clutter --trials 4 --jobs 1 --out sim-results/clutter
 else
     sim "$@"
 fi

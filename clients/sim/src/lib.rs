@@ -5,6 +5,7 @@
 pub mod bench;
 pub mod camera;
 pub mod closing;
+pub mod clutter;
 pub mod compare;
 pub mod completion;
 mod debug;

@@ -149,6 +149,31 @@ enum Command {
         #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
         snapshots: bool,
     },
+    /// Reach-to-grasp in clutter (the dissertation's Table 3.1): each target among 3–6 shared
+    /// objects, found by name, reached around the others, grasped and lifted; writes
+    /// results.json and table.md to --out.
+    Clutter {
+        /// The hand (built-in name, hand TOML or MJCF model).
+        #[arg(long, default_value = "robotiq_2f85")]
+        hand: String,
+        /// Comma-separated target objects (the others are drawn from them too); default: the
+        /// 12 shared YCB objects.
+        #[arg(long)]
+        objects: Option<String>,
+        /// Trials per target.
+        #[arg(long, default_value_t = 4)]
+        trials: usize,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Worker threads (default: the number of cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+        #[arg(long, default_value = "sim-results/clutter")]
+        out: PathBuf,
+        /// Radius of the sphere that stands for the hand in PlanReach, m (default: graspd's).
+        #[arg(long)]
+        hand_radius: Option<f64>,
+    },
     /// Two bench runs on the same seeds, trial by trial: per hand the counts with their 95 %
     /// intervals, the trials that flipped and McNemar's exact p-value, then the objects that
     /// changed (markdown). Needs no graspd.
@@ -341,6 +366,43 @@ fn real_main() -> Result<(), SimError> {
                 options: opts,
             };
             let report = run_bench(&config, &service)?;
+            println!("{}", report.markdown);
+        }
+        Command::Clutter {
+            hand,
+            objects,
+            trials,
+            seed,
+            jobs,
+            out,
+            hand_radius,
+        } => {
+            use graspd_sim::object::{BEYOND_TABLE_5_2, TABLE_5_2, is_shared_ycb};
+            let objects = match objects {
+                Some(s) => split_names(&s),
+                None => [TABLE_5_2.as_slice(), &BEYOND_TABLE_5_2]
+                    .concat()
+                    .into_iter()
+                    .filter(|o| is_shared_ycb(o))
+                    .map(String::from)
+                    .collect(),
+            };
+            let config = graspd_sim::clutter::ClutterConfig {
+                hand,
+                objects,
+                trials,
+                seed,
+                jobs: jobs
+                    .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+                out,
+                hands_dir,
+                objects_dir,
+                options: graspd_sim::clutter::ClutterOptions {
+                    trial: opts,
+                    hand_radius,
+                },
+            };
+            let report = graspd_sim::clutter::run_clutter_bench(&config, &service)?;
             println!("{}", report.markdown);
         }
         Command::Compare { .. } | Command::Completion { .. } => {

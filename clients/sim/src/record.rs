@@ -92,6 +92,15 @@ pub struct TrialRecord {
     pub gravity_held: Option<[bool; 6]>,
     /// Object placement (x, y, yaw).
     pub placement: [f64; 3],
+    /// Other objects (in clutter) that a hand body touched before the close, and the deepest
+    /// it went into one, mm; those touched on the reach itself, before its pre-grasp point
+    /// (the rest on the approach onto the grasp).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub touched_others: Vec<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub touched_in_reach: Vec<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub others_penetration_mm: Option<f64>,
     /// The snapshot after the hold (when asked for and the object got that far).
     #[serde(skip)]
     pub snapshot: Option<RgbdImage>,
@@ -134,6 +143,9 @@ impl TrialRecord {
             planned_depth_mm: None,
             gravity_held: None,
             placement: place,
+            touched_others: Vec::new(),
+            touched_in_reach: Vec::new(),
+            others_penetration_mm: None,
             snapshot: None,
         }
     }

@@ -8,7 +8,7 @@ use graspd_api::convert::pose_to_proto;
 use graspd_core::planning::Pose;
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::grasp_planner_client::GraspPlannerClient;
-use nalgebra::Point3;
+use nalgebra::{Isometry3, Point3};
 use std::path::Path;
 use tonic::transport::Channel;
 
@@ -21,12 +21,14 @@ pub struct Service {
 }
 
 /// What a robot stack asks of PlanGrasp beyond the frame: how many ranked plans to return and,
-/// optionally, the grasp type (graspd detects it when None).
-#[derive(Debug, Clone, Copy, Default)]
+/// optionally, the grasp type (graspd detects it when None) and the object by name.
+#[derive(Debug, Clone, Default)]
 pub struct PlanAsk {
     /// `options.candidates` (0: graspd's default, one plan).
     pub candidates: u32,
     pub grasp_type: Option<pb::GraspType>,
+    /// `hints.object`: the object graspd's recogniser takes for this name is the target.
+    pub object: Option<String>,
 }
 
 /// What a trial needs from a plan.
@@ -99,7 +101,7 @@ impl Service {
         extra_views: &[RgbdImage],
         cloud: Option<&[Point3<f64>]>,
         seed: u64,
-        ask: PlanAsk,
+        ask: &PlanAsk,
     ) -> Result<PlanResult, tonic::Status> {
         let mut c = self.client.clone();
         let input = match cloud {
@@ -138,6 +140,7 @@ impl Service {
                     z: eye.z,
                 }),
                 grasp_type: ask.grasp_type.map_or(0, |t| t as i32),
+                object: ask.object.clone().unwrap_or_default(),
                 ..Default::default()
             }),
             ..Default::default()
@@ -148,6 +151,40 @@ impl Service {
             response,
             latency: t0.elapsed().as_secs_f64(),
         })
+    }
+
+    /// PlanReach from the hand frame at `start` to a plan's grasp (its hand pose, approach and
+    /// pre-grasp distance), the other objects in `scene` as obstacles, the hand a sphere of
+    /// `hand_radius` (None: graspd's default).
+    pub fn reach(
+        &self,
+        start: &Isometry3<f64>,
+        plan: &pb::PlanGraspResponse,
+        scene: &RgbdImage,
+        hand_radius: Option<f64>,
+    ) -> Result<pb::PlanReachResponse, tonic::Status> {
+        let pose = |p: &Option<pb::Pose>| {
+            graspd_api::convert::pose_from_proto(p, "")
+                .map(|p| p.isometry())
+                .map_err(|e| tonic::Status::invalid_argument(e.to_string()))
+        };
+        let (goal, pre) = (pose(&plan.hand_pose)?, pose(&plan.pregrasp_pose)?);
+        let req = pb::PlanReachRequest {
+            start: Some(pose_to_proto(&Pose::from_isometry(start))),
+            goal: plan.hand_pose,
+            approach: plan.approach,
+            pregrasp_distance: Some((goal.translation.vector - pre.translation.vector).norm()),
+            scene: Some(frame_to_proto(scene)),
+            hand_radius,
+            // The approach as the standard trial's.
+            options: Some(pb::ReachOptions {
+                approach_duration: crate::trial::APPROACH_S,
+                ..Default::default()
+            }),
+            ..Default::default()
+        };
+        let mut c = self.client.clone();
+        Ok(self.rt.block_on(c.plan_reach(req))?.into_inner())
     }
 }
 

@@ -39,7 +39,8 @@ use crate::hand::SimHand;
 use crate::scene::Scene;
 use crate::service::Service;
 use crate::trial::{
-    LIFT_M, LIFT_S, LIFTED_M, Trial, TrialOptions, TrialRecord, placement, pre_grasp_and_approach,
+    LIFT_M, LIFT_S, LIFTED_M, Motion, Trial, TrialOptions, TrialRecord, placement,
+    pre_grasp_and_approach,
 };
 use graspd_core::tactile::layout::SensorLayout;
 use graspd_proto::v1 as pb;
@@ -333,7 +334,7 @@ pub fn run_disturbance_trial(
         slid_mm: 0.0,
     };
     let image = trial.render(opts.intrinsics, opts.camera);
-    let plan = match service.plan(hand, &image, &[], None, seed, Default::default()) {
+    let plan = match service.plan(hand, &image, &[], None, seed, &Default::default()) {
         Ok(p) => p,
         Err(s) => {
             out.detail = format!("no plan: {}", s.message());
@@ -341,13 +342,14 @@ pub fn run_disturbance_trial(
         }
     };
     let mut rec = TrialRecord::empty(hand, object, seed, place);
-    let approached = match pre_grasp_and_approach(&mut trial, &plan, start, &mut rec) {
-        Ok(a) => a,
-        Err(o) => {
-            out.detail = format!("{}: {}", o.name(), rec.detail);
-            return Ok(out);
-        }
-    };
+    let approached =
+        match pre_grasp_and_approach(&mut trial, &plan, start, Motion::Straight, &mut rec) {
+            Ok(a) => a,
+            Err(o) => {
+                out.detail = format!("{}: {}", o.name(), rec.detail);
+                return Ok(out);
+            }
+        };
     let mut stream = if stabilized {
         let layout = pb::TactileFinger {
             name: String::new(),

@@ -449,6 +449,56 @@ fn the_stabilized_grip_keeps_the_can_the_constant_grip_loses() {
     assert!(stabilized.slid_mm < constant.slid_mm);
 }
 
+/// Reach-to-grasp in clutter against graspd on loopback (issue 18 part 5): the mustard bottle,
+/// named among five objects, is found by graspd's recogniser, reached around the others along
+/// PlanReach's trajectory without touching them, grasped and lifted; the trial's requests are
+/// timed.
+#[test]
+fn a_named_object_in_clutter_is_found_reached_and_grasped_against_graspd() {
+    use graspd_sim::clutter::{ClutterOptions, run_clutter_trial};
+    let Some(data) = testdata() else { return };
+    let server = Server::start();
+    let rt = tokio::runtime::Runtime::new().unwrap();
+    let service =
+        Service::connect(&format!("http://{}", server.grpc_addr), rt.handle().clone()).unwrap();
+    let hand = SimHand::load("robotiq_2f85", &data.join("hands")).unwrap();
+    service.ensure_hand(&hand).unwrap();
+    let names = [
+        "tomato_soup_can",
+        "tuna_fish_can",
+        "potted_meat_can",
+        "mustard_bottle",
+        "orange",
+        "master_chef_can",
+    ];
+    let objects: Vec<SimObject> = names
+        .iter()
+        .map(|n| SimObject::load(&data.join("objects"), n).unwrap())
+        .collect();
+    let opts = ClutterOptions {
+        trial: TrialOptions {
+            replans: 2,
+            ..trial_options()
+        },
+        hand_radius: None,
+    };
+    let rec = run_clutter_trial(&hand, &objects, 3, &service, 303, &opts).unwrap();
+    println!("{}", serde_json::to_string_pretty(&rec).unwrap());
+    assert_eq!(rec.target, "mustard_bottle");
+    assert!(rec.others.len() >= 2, "{:?}", rec.others);
+    assert!(rec.detected, "graspd planned for {:?}", rec.chosen);
+    assert!(rec.reach_planned, "{:?}", rec.reach_refused);
+    assert_eq!(
+        rec.collision_free,
+        Some(true),
+        "{:?}",
+        rec.trial.touched_in_reach
+    );
+    assert_eq!(rec.trial.outcome, Outcome::Success, "{}", rec.trial.detail);
+    assert!(rec.grasped);
+    assert!(rec.first_plan_ms.unwrap() > 0.0 && rec.first_reach_ms.unwrap() > 0.0);
+}
+
 /// The tomato soup can on the table with `hand`.
 fn can_scene(data: &std::path::Path, hand: &SimHand) -> Scene {
     let can = SimObject::load(&data.join("objects"), "tomato_soup_can").unwrap();

@@ -43,6 +43,7 @@ pub use crate::record::{Outcome, TrialRecord};
 use crate::scene::{Scene, from_mj};
 use crate::service::{PlanAsk, PlanResult, Service};
 use graspd_api::convert::{grasp_type_from_proto, pose_from_proto};
+use mujoco_rs::prelude::MjtObjBase;
 use nalgebra::{Isometry3, Point3, Vector3};
 use rand::{RngExt, SeedableRng};
 
@@ -150,9 +151,10 @@ pub fn run_trial(
             0
         },
         grasp_type: opts.grasp_type,
+        object: None,
     };
     let robustness = |r: &PlanResult| r.response.quality.as_ref().map_or(0.0, |q| q.robustness);
-    let mut plan = service.plan(hand, &image, &extra, cloud.as_deref(), seed, ask);
+    let mut plan = service.plan(hand, &image, &extra, cloud.as_deref(), seed, &ask);
     let mut attempts = 1;
     let mut extra_ms = 0.0;
     while attempts <= opts.replans && matches!(&plan, Ok(p) if !p.response.feasible) {
@@ -162,7 +164,7 @@ pub fn run_trial(
             &extra,
             cloud.as_deref(),
             seed + 1000 * attempts as u64,
-            ask,
+            &ask,
         );
         attempts += 1;
         if let Ok(p) = &again {
@@ -199,7 +201,7 @@ pub fn run_trial(
 
 /// Puts the plan ranked `k`-th in `candidates` in the response's place (no joints when graspd
 /// returned fewer: the trial then ends `no_plan`).
-fn take_candidate(r: &mut graspd_proto::v1::PlanGraspResponse, k: usize) {
+pub fn take_candidate(r: &mut graspd_proto::v1::PlanGraspResponse, k: usize) {
     match r.candidates.get(k).cloned() {
         Some(c) => {
             r.contacts = c.contacts;
@@ -230,12 +232,29 @@ pub struct Approached {
     pub start_com: Point3<f64>,
 }
 
-/// Steps 3–4 of the protocol: records the plan, pre-shapes at the pre-grasp pose and approaches;
-/// `Err` with the failure class when the plan has no joints or the approach collides.
+/// How the hand gets to the grasp.
+#[derive(Debug, Clone, Copy)]
+pub enum Motion<'p> {
+    /// The standard protocol: a jump to the pre-grasp pose, then the straight approach.
+    Straight,
+    /// Along a reach (PlanReach's hand-frame poses at their times, ending at the grasp), from
+    /// its first pose, the hand pre-shaped there; the approach onto the grasp takes its last
+    /// `approach_s` seconds.
+    Path {
+        path: &'p [(f64, Isometry3<f64>)],
+        approach_s: f64,
+    },
+}
+
+/// Steps 3–4 of the protocol: records the plan, pre-shapes and moves the hand to the grasp
+/// (`motion`); `Err` with the failure class when the plan has no joints or the approach
+/// collides. Hand contacts with other objects on the way are recorded
+/// (`rec.touched_others`).
 pub fn pre_grasp_and_approach(
     trial: &mut Trial,
     plan: &PlanResult,
     start: Point3<f64>,
+    motion: Motion<'_>,
     rec: &mut TrialRecord,
 ) -> Result<Approached, Outcome> {
     let r = &plan.response;
@@ -315,15 +334,83 @@ pub fn pre_grasp_and_approach(
         &pre_joints
     });
     trial.data.ctrl_mut().copy_from_slice(&opened);
-    trial.place_base(&pre_root);
-    trial.data.forward();
-    trial.run(PRESHAPE_S, |_, _| {});
-    debug::snapshot(trial, "pregrasp");
-    // Approach along the straight line.
-    trial.run(APPROACH_S, |t, f| {
-        let p = pre_root.lerp_slerp(&root, f);
-        t.set_base(&p);
-    });
+    // The base pose that puts the hand frame at `hand`.
+    let base_for = |hand: &Isometry3<f64>| hand * hand_pose.inverse() * root;
+    // Other objects touched: on the reach (true) or on the approach.
+    let mut others: Vec<(usize, bool)> = Vec::new();
+    let mut deepest: f64 = 0.0;
+    let mut watch = |t: &Trial, in_reach: bool| {
+        for (b, depth) in t.hand_contacts_with_others() {
+            deepest = deepest.max(depth);
+            if !others.contains(&(b, in_reach)) {
+                others.push((b, in_reach));
+            }
+        }
+    };
+    match motion {
+        Motion::Straight => {
+            trial.place_base(&pre_root);
+            trial.data.forward();
+            trial.run(PRESHAPE_S, |_, _| {});
+            debug::snapshot(trial, "pregrasp");
+            // Approach along the straight line.
+            trial.run(APPROACH_S, |t, f| {
+                let p = pre_root.lerp_slerp(&root, f);
+                t.set_base(&p);
+                watch(t, false);
+            });
+        }
+        Motion::Path { path, approach_s } => {
+            let Some((&(t0, first), &(t1, _))) = path.first().zip(path.last()) else {
+                rec.detail = "the reach has no samples".into();
+                return Err(Outcome::NoPlan);
+            };
+            trial.place_base(&base_for(&first));
+            trial.data.forward();
+            trial.run(PRESHAPE_S, |t, _| watch(t, true));
+            debug::snapshot(trial, "pregrasp");
+            let duration = (t1 - t0).max(1e-3);
+            let mut k = 0;
+            trial.run(duration, |t, f| {
+                // The pose at this time, between the samples around it.
+                let now = t0 + f * duration;
+                while k + 2 < path.len() && path[k + 1].0 <= now {
+                    k += 1;
+                }
+                let (a, b) = (path[k], path[(k + 1).min(path.len() - 1)]);
+                let s = if b.0 > a.0 {
+                    ((now - a.0) / (b.0 - a.0)).clamp(0.0, 1.0)
+                } else {
+                    1.0
+                };
+                t.set_base(&base_for(&a.1.lerp_slerp(&b.1, s)));
+                watch(t, now < t1 - approach_s);
+            });
+            // Settle onto the grasp pose itself.
+            trial.run(0.1, |t, _| {
+                t.set_base(&root);
+                watch(t, false);
+            });
+        }
+    }
+    let m = &trial.scene.model;
+    let names = |in_reach: Option<bool>| {
+        let mut n: Vec<String> = others
+            .iter()
+            .filter(|(_, r)| in_reach.is_none_or(|want| *r == want))
+            .map(|&(b, _)| {
+                m.id_to_name(MjtObjBase::mjOBJ_BODY, b)
+                    .unwrap_or_default()
+                    .to_string()
+            })
+            .collect();
+        n.sort();
+        n.dedup();
+        n
+    };
+    rec.touched_others = names(None);
+    rec.touched_in_reach = names(Some(true));
+    rec.others_penetration_mm = (!others.is_empty()).then_some(deepest * 1e3);
     debug::snapshot(trial, "approached");
     let through = trial.deepest_table_penetration();
     if through > TABLE_PENETRATION_M {
@@ -352,15 +439,25 @@ fn execute(
     opts: &TrialOptions,
     rec: &mut TrialRecord,
 ) -> Outcome {
+    match pre_grasp_and_approach(trial, plan, start, Motion::Straight, rec) {
+        Ok(a) => grasp_and_lift(trial, a, opts, rec),
+        Err(o) => o,
+    }
+}
+
+/// Steps 5–7 of the protocol, from the approached hand: close, lift, hold, shake.
+pub fn grasp_and_lift(
+    trial: &mut Trial,
+    approached: Approached,
+    opts: &TrialOptions,
+    rec: &mut TrialRecord,
+) -> Outcome {
     let Approached {
         root,
         grasp,
         closed,
         start_com,
-    } = match pre_grasp_and_approach(trial, plan, start, rec) {
-        Ok(a) => a,
-        Err(o) => return o,
-    };
+    } = approached;
     // Close (crate::closing): guarded unless the options ask for the open loop.
     let (before_p, before_q) = (trial.object_position(), trial.object_orientation());
     let commands = if trial.scene.balanced_grip {

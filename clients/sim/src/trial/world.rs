@@ -35,12 +35,19 @@ pub struct Trial<'a> {
 impl<'a> Trial<'a> {
     /// Fresh data with object 0 at `place` and the hand parked; steps [`SETTLE_S`].
     pub fn new(scene: &'a Scene, place: [f64; 3]) -> Self {
+        Self::with_placements(scene, &[place])
+    }
+
+    /// Fresh data with object k at `places[k]` (x, y, yaw on the table; objects beyond them
+    /// where the scene put them) and the hand parked; steps [`SETTLE_S`].
+    pub fn with_placements(scene: &'a Scene, places: &[[f64; 3]]) -> Self {
         let mut data = scene.model.make_data();
-        let pose = on_table(place[0], place[1], place[2]);
-        let (p, q) = to_mj(&pose);
-        let a = scene.object_qpos[0];
-        data.qpos_mut()[a..a + 3].copy_from_slice(&p);
-        data.qpos_mut()[a + 3..a + 7].copy_from_slice(&q);
+        for (place, &a) in places.iter().zip(&scene.object_qpos) {
+            let pose = on_table(place[0], place[1], place[2]);
+            let (p, q) = to_mj(&pose);
+            data.qpos_mut()[a..a + 3].copy_from_slice(&p);
+            data.qpos_mut()[a + 3..a + 7].copy_from_slice(&q);
+        }
         // Gravity compensation of the hand, as the arm carrying it would provide: every hand
         // body gets its weight back at its centre of mass.
         let g = scene.model.ffi().opt.gravity;
@@ -138,6 +145,32 @@ impl<'a> Trial<'a> {
                 };
                 self.scene.hand_bodies[other].then_some((i, other))
             })
+    }
+
+    /// Contacts between a hand body and an object other than object 0 (clutter): (that
+    /// object's body, penetration depth in m, 0 for a touch).
+    pub fn hand_contacts_with_others(&self) -> Vec<(usize, f64)> {
+        let target = self.scene.object_bodies[0];
+        let bodyof = self.scene.model.geom_bodyid();
+        let mut out = Vec::new();
+        for c in self.data.contact() {
+            if c.dist > 0.0 {
+                continue;
+            }
+            let (b1, b2) = (
+                bodyof[c.geom[0] as usize] as usize,
+                bodyof[c.geom[1] as usize] as usize,
+            );
+            for (obj, other) in [(b1, b2), (b2, b1)] {
+                if obj != target
+                    && self.scene.object_bodies.contains(&obj)
+                    && self.scene.hand_bodies[other]
+                {
+                    out.push((obj, -c.dist));
+                }
+            }
+        }
+        out
     }
 
     /// Distinct hand bodies within 2 mm of object 0, in contact-list order.
