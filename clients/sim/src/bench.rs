@@ -71,6 +71,33 @@ pub struct BenchReport {
     pub markdown: String,
 }
 
+/// A progress bar of `len` trials.
+pub(crate) fn trials_bar(len: u64) -> ProgressBar {
+    let bar = ProgressBar::new(len);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} trials {elapsed} (eta {eta}) {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+/// Runs `each` on every item of `work` from `jobs` threads (at least one), each thread taking
+/// the next item not yet taken.
+pub(crate) fn in_parallel<W: Sync>(jobs: usize, work: &[W], each: impl Fn(&W) + Sync) {
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    std::thread::scope(|s| {
+        for _ in 0..jobs.max(1) {
+            s.spawn(|| {
+                while let Some(w) =
+                    work.get(next.fetch_add(1, std::sync::atomic::Ordering::Relaxed))
+                {
+                    each(w);
+                }
+            });
+        }
+    });
+}
+
 /// Runs the benchmark and writes `results.json`, `table.md` and `snapshots/*.png` under
 /// `config.out`.
 pub fn run_bench(config: &BenchConfig, service: &Service) -> Result<BenchReport, SimError> {
@@ -95,62 +122,37 @@ pub fn run_bench(config: &BenchConfig, service: &Service) -> Result<BenchReport,
     let cells: Vec<(usize, usize)> = (0..hands.len())
         .flat_map(|h| (0..objects.len()).map(move |o| (h, o)))
         .collect();
-    let total = cells.len() * config.trials;
-    let bar = ProgressBar::new(total as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} trials {elapsed} (eta {eta}) {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    let next = Mutex::new(0usize);
+    let bar = trials_bar((cells.len() * config.trials) as u64);
     let results: Mutex<Vec<TrialRecord>> = Mutex::new(Vec::new());
     let errors: Mutex<Vec<SimError>> = Mutex::new(Vec::new());
     let t0 = std::time::Instant::now();
-    std::thread::scope(|s| {
-        for _ in 0..config.jobs.max(1) {
-            s.spawn(|| {
-                loop {
-                    let k = {
-                        let mut n = next.lock().expect("work counter");
-                        *n += 1;
-                        *n - 1
-                    };
-                    let Some(&(h, o)) = cells.get(k) else { break };
-                    let (hand, obj) = (&hands[h], &objects[o]);
-                    let scene = match Scene::build(hand, &[(obj, on_table(0.0, 0.0, 0.0))]) {
-                        Ok(s) => s,
-                        Err(e) => {
-                            errors.lock().expect("errors").push(e);
-                            bar.inc(config.trials as u64);
-                            continue;
-                        }
-                    };
-                    for i in 0..config.trials {
-                        let seed = config.seed + i as u64;
-                        let mut opts = config.options;
-                        if config.snapshots && i == 0 {
-                            opts.snapshot = Some((Intrinsics::kinect(480, 360), snapshot_view()));
-                        }
-                        let mut rec = run_trial(&scene, hand, &obj.name, service, seed, &opts);
-                        if let Some(img) = rec.snapshot.take() {
-                            // Taken after the hold; the name says how the trial ended.
-                            let name =
-                                format!("{}_{}_{}.png", hand.name, obj.name, rec.outcome.name());
-                            if let Err(e) = save_png(&img, &config.out.join("snapshots").join(name))
-                            {
-                                errors.lock().expect("errors").push(e);
-                            }
-                        }
-                        bar.set_message(format!(
-                            "{} {} {}",
-                            hand.name,
-                            obj.name,
-                            rec.outcome.name()
-                        ));
-                        bar.inc(1);
-                        results.lock().expect("results").push(rec);
-                    }
+    in_parallel(config.jobs, &cells, |&(h, o)| {
+        let (hand, obj) = (&hands[h], &objects[o]);
+        let scene = match Scene::build(hand, &[(obj, on_table(0.0, 0.0, 0.0))]) {
+            Ok(s) => s,
+            Err(e) => {
+                errors.lock().expect("errors").push(e);
+                bar.inc(config.trials as u64);
+                return;
+            }
+        };
+        for i in 0..config.trials {
+            let seed = config.seed + i as u64;
+            let mut opts = config.options;
+            if config.snapshots && i == 0 {
+                opts.snapshot = Some((Intrinsics::kinect(480, 360), snapshot_view()));
+            }
+            let mut rec = run_trial(&scene, hand, &obj.name, service, seed, &opts);
+            if let Some(img) = rec.snapshot.take() {
+                // Taken after the hold; the name says how the trial ended.
+                let name = format!("{}_{}_{}.png", hand.name, obj.name, rec.outcome.name());
+                if let Err(e) = save_png(&img, &config.out.join("snapshots").join(name)) {
+                    errors.lock().expect("errors").push(e);
                 }
-            });
+            }
+            bar.set_message(format!("{} {} {}", hand.name, obj.name, rec.outcome.name()));
+            bar.inc(1);
+            results.lock().expect("results").push(rec);
         }
     });
     bar.finish_and_clear();

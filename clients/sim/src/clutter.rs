@@ -24,6 +24,7 @@
 //! The table counts each over all trials, as the dissertation's Table 3.1 does.
 
 use crate::SimError;
+use crate::bench::{in_parallel, trials_bar};
 use crate::camera::RgbdImage;
 use crate::hand::SimHand;
 use crate::object::SimObject;
@@ -34,7 +35,6 @@ use crate::trial::{
     APPROACH_S, Motion, Trial, TrialOptions, grasp_and_lift, pre_grasp_and_approach, take_candidate,
 };
 use graspd_api::convert::pose_from_proto;
-use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::{Isometry3, Point3, Translation3};
 use rand::{RngExt, SeedableRng};
 use serde::Serialize;
@@ -407,39 +407,21 @@ pub fn run_clutter_bench(
     let work: Vec<(usize, u64)> = (0..objects.len())
         .flat_map(|o| (0..config.trials).map(move |i| (o, config.seed + i as u64)))
         .collect();
-    let bar = ProgressBar::new(work.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} trials {elapsed} (eta {eta}) {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    let next = Mutex::new(0usize);
+    let bar = trials_bar(work.len() as u64);
     let results: Mutex<Vec<ClutterRecord>> = Mutex::new(Vec::new());
     let errors: Mutex<Vec<SimError>> = Mutex::new(Vec::new());
     let t0 = std::time::Instant::now();
-    std::thread::scope(|s| {
-        for _ in 0..config.jobs.max(1) {
-            s.spawn(|| {
-                loop {
-                    let k = {
-                        let mut n = next.lock().expect("work counter");
-                        *n += 1;
-                        *n - 1
-                    };
-                    let Some(&(o, seed)) = work.get(k) else { break };
-                    // Each trial its own seed, so that the draw of the others differs per
-                    // target too.
-                    let seed = seed * 100 + o as u64;
-                    match run_clutter_trial(&hand, &objects, o, service, seed, &config.options) {
-                        Ok(r) => {
-                            bar.set_message(format!("{} {}", r.target, r.trial.outcome.name()));
-                            results.lock().expect("results").push(r);
-                        }
-                        Err(e) => errors.lock().expect("errors").push(e),
-                    }
-                    bar.inc(1);
-                }
-            });
+    in_parallel(config.jobs, &work, |&(o, seed)| {
+        // Each trial its own seed, so that the draw of the others differs per target too.
+        let seed = seed * 100 + o as u64;
+        match run_clutter_trial(&hand, &objects, o, service, seed, &config.options) {
+            Ok(r) => {
+                bar.set_message(format!("{} {}", r.target, r.trial.outcome.name()));
+                results.lock().expect("results").push(r);
+            }
+            Err(e) => errors.lock().expect("errors").push(e),
         }
+        bar.inc(1);
     });
     bar.finish_and_clear();
     if let Some(e) = errors.into_inner().expect("errors").into_iter().next() {

@@ -9,7 +9,7 @@ pub mod labels;
 pub mod recognition;
 pub mod scene;
 
-use graspd_core::perception::{CameraIntrinsics, DecodedFrame, bilinear_taps, resized_planes};
+use graspd_core::perception::{DecodedFrame, bilinear_taps, resized_planes};
 pub use scene::{Frame, Scene};
 
 /// Source rows (or columns) that a bilinear resize from `src` to `dst` reads, and the one the
@@ -60,29 +60,8 @@ pub fn sample(
     } else {
         (needed(k.height, height), needed(k.width, width))
     };
-    let mut frame = scene.render(&rows, &cols);
-    let decoded = DecodedFrame {
-        width: frame.width,
-        height: frame.height,
-        rgb: if full {
-            frame.rgb.clone()
-        } else {
-            std::mem::take(&mut frame.rgb)
-        },
-        depth: if full {
-            frame.depth.clone()
-        } else {
-            std::mem::take(&mut frame.depth)
-        },
-        intrinsics: CameraIntrinsics {
-            fx: k.fx,
-            fy: k.fy,
-            cx: k.cx,
-            cy: k.cy,
-        },
-        camera_to_world: Some(frame.camera_to_world),
-        valid_depth: frame.depth.iter().filter(|d| **d > 0.0).count(),
-    };
+    let frame = scene.render(&rows, &cols);
+    let decoded = frame.decoded(&k);
     let x = resized_planes(&decoded, width, height, true);
     let (rx, ry) = (
         frame.width as f64 / width as f64,

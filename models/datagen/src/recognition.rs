@@ -14,9 +14,7 @@
 use crate::scene::{Appearance, Scene, Texture, random_primitive, ycb_object};
 use graspd_core::perception::recognition::{ObjectCrop, UNKNOWN, object_crop};
 use graspd_core::perception::segmentation::{SegmentationParams, objects_on_plane};
-use graspd_core::perception::{
-    CameraIntrinsics, CloudFrame, DecodedFrame, PixelCloud, depth_to_cloud,
-};
+use graspd_core::perception::{CloudFrame, PixelCloud, depth_to_cloud};
 use graspd_testkit::Object;
 use graspd_testkit::texture::texture;
 use rand::{RngExt, SeedableRng};
@@ -138,20 +136,7 @@ pub fn recognition_sample(seed: u64, i: usize, unseen: bool) -> Result<SceneCrop
         .map_err(|e| e.to_string())?;
     let k = scene.camera.intrinsics;
     let frame = scene.render(&vec![true; k.height], &vec![true; k.width]);
-    let decoded = DecodedFrame {
-        width: frame.width,
-        height: frame.height,
-        valid_depth: frame.depth.iter().filter(|d| **d > 0.0).count(),
-        rgb: frame.rgb,
-        depth: frame.depth,
-        intrinsics: CameraIntrinsics {
-            fx: k.fx,
-            fy: k.fy,
-            cx: k.cx,
-            cy: k.cy,
-        },
-        camera_to_world: Some(frame.camera_to_world),
-    };
+    let decoded = frame.decoded(&k);
     let cloud: PixelCloud = depth_to_cloud(&decoded, CloudFrame::World);
     let (plane, clusters, _) =
         objects_on_plane(&cloud.cloud.points, None, &SegmentationParams::default());

@@ -9,6 +9,7 @@
 //! sensor. Every object pixel is labelled by [`crate::labels`].
 
 use crate::labels::{PartDims, PartLabels, part_labels};
+use graspd_core::perception::{CameraIntrinsics, DecodedFrame};
 use graspd_testkit::texture::ObjectTexture;
 use graspd_testkit::{Camera, Object, mesh};
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
@@ -450,6 +451,26 @@ pub struct Frame {
     pub labels: Vec<u8>,
     pub objects: Vec<u8>,
     pub camera_to_world: Isometry3<f64>,
+}
+
+impl Frame {
+    /// The frame as graspd decodes one (camera `k`'s intrinsics).
+    pub fn decoded(&self, k: &graspd_testkit::Intrinsics) -> DecodedFrame {
+        DecodedFrame {
+            width: self.width,
+            height: self.height,
+            rgb: self.rgb.clone(),
+            depth: self.depth.clone(),
+            intrinsics: CameraIntrinsics {
+                fx: k.fx,
+                fy: k.fy,
+                cx: k.cx,
+                cy: k.cy,
+            },
+            camera_to_world: Some(self.camera_to_world),
+            valid_depth: self.depth.iter().filter(|d| **d > 0.0).count(),
+        }
+    }
 }
 
 /// An object before placement: its parts in the object's frame (origin on the table, z up) and

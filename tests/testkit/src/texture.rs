@@ -4,7 +4,7 @@
 //! gives the colour the scanner saw there. The chips can has only a collision mesh and no
 //! texture.
 
-use crate::ycb::{Object, mesh};
+use crate::ycb::{Object, mesh, obj_load_options};
 use crate::{Result, TestkitError};
 use image::RgbImage;
 use nalgebra::Point3;
@@ -78,15 +78,7 @@ pub fn load_texture(object: Object) -> Result<Option<ObjectTexture>> {
     }
     let path = object.mesh_path();
     // The options of `ycb::load_mesh`, so that the triangles come in the same order.
-    #[allow(clippy::needless_update)]
-    let opts = tobj::LoadOptions {
-        single_index: false,
-        triangulate: true,
-        ignore_points: true,
-        ignore_lines: true,
-        ..Default::default()
-    };
-    let (models, _) = tobj::load_obj(&path, &opts)
+    let (models, _) = tobj::load_obj(&path, &obj_load_options())
         .map_err(|e| TestkitError(format!("cannot load {} ({e})", path.display())))?;
     let mut uv = Vec::new();
     for m in &models {

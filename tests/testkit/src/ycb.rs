@@ -130,21 +130,26 @@ impl FromStr for Object {
     }
 }
 
-/// Loads the object's mesh from the test data (uncached; see [`mesh`]). All OBJ groups are
-/// merged into one triangle mesh; faces are triangulated.
-pub fn load_mesh(object: Object) -> Result<TriMesh> {
-    let path = object.mesh_path();
+/// How the OBJ files are read: triangulated faces, positions and texture coordinates indexed
+/// apart ([`crate::texture`] reads the same triangles in the same order).
+pub fn obj_load_options() -> tobj::LoadOptions {
     // `..Default::default()` covers the fields that tobj's optional "merging"/"reordering"
     // features add, should another crate turn them on.
     #[allow(clippy::needless_update)]
-    let opts = tobj::LoadOptions {
+    tobj::LoadOptions {
         single_index: false,
         triangulate: true,
         ignore_points: true,
         ignore_lines: true,
         ..Default::default()
-    };
-    let (models, _materials) = tobj::load_obj(&path, &opts).map_err(|e| {
+    }
+}
+
+/// Loads the object's mesh from the test data (uncached; see [`mesh`]). All OBJ groups are
+/// merged into one triangle mesh; faces are triangulated.
+pub fn load_mesh(object: Object) -> Result<TriMesh> {
+    let path = object.mesh_path();
+    let (models, _materials) = tobj::load_obj(&path, &obj_load_options()).map_err(|e| {
         TestkitError(format!(
             "cannot load {} ({e}); is the test data there? Set GRASPD_TESTDATA to the folder \
              holding objects/ycb",
