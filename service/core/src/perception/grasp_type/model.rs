@@ -57,15 +57,7 @@ impl GraspTypeModel {
     /// `intra_threads`: ONNX Runtime threads per run (0: its default, one per core). Initialises
     /// ONNX Runtime from `$ORT_DYLIB_PATH` if [`crate::onnx_runtime::init_onnx_runtime`] has not been called.
     pub fn load(path: &Path, intra_threads: usize) -> Result<Self, ModelError> {
-        let load_err = |reason: String| ModelError::Load {
-            path: path.to_path_buf(),
-            reason,
-        };
-        // ONNX Runtime's message for a missing file is an opaque system error.
-        if !path.is_file() {
-            return Err(load_err("no such file".into()));
-        }
-        let bytes = std::fs::read(path).map_err(|e| load_err(e.to_string()))?;
+        let bytes = read_model_file(path)?;
         Self::from_bytes(&bytes, &path.display().to_string(), intra_threads)
     }
 
@@ -179,6 +171,19 @@ impl GraspTypeModel {
         }
         data
     }
+}
+
+/// The bytes of a model file; a missing file is named as such (ONNX Runtime's message for it is
+/// an opaque system error).
+pub(crate) fn read_model_file(path: &Path) -> Result<Vec<u8>, ModelError> {
+    let load_err = |reason: String| ModelError::Load {
+        path: path.to_path_buf(),
+        reason,
+    };
+    if !path.is_file() {
+        return Err(load_err("no such file".into()));
+    }
+    std::fs::read(path).map_err(|e| load_err(e.to_string()))
 }
 
 /// The frame as the network sees it before colour normalisation: planes R, G, B (0…255) and,

@@ -5,7 +5,7 @@
 
 use super::crop::{CROP_CHANNELS, CROP_SIDE, ObjectCrop, SIZE_FEATURES};
 use crate::onnx_runtime::{SessionError, fmt_dims, session_from_memory, tensor_info};
-use crate::perception::grasp_type::ModelError;
+use crate::perception::grasp_type::{ModelError, read_model_file};
 use ort::session::Session;
 use ort::value::{TensorElementType, TensorRef};
 use std::path::{Path, PathBuf};
@@ -27,16 +27,7 @@ pub struct RecognitionModel {
 impl RecognitionModel {
     /// Loads the ONNX model at `path` and checks it against the contract.
     pub fn load(path: &Path, intra_threads: usize) -> Result<Self, ModelError> {
-        if !path.is_file() {
-            return Err(ModelError::Load {
-                path: path.to_path_buf(),
-                reason: "no such file".into(),
-            });
-        }
-        let bytes = std::fs::read(path).map_err(|e| ModelError::Load {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        })?;
+        let bytes = read_model_file(path)?;
         Self::from_bytes(&bytes, &path.display().to_string(), intra_threads)
     }
 
