@@ -155,13 +155,14 @@ impl Service {
 
     /// PlanReach from the hand frame at `start` to a plan's grasp (its hand pose, approach and
     /// pre-grasp distance), the other objects in `scene` as obstacles, the hand a sphere of
-    /// `hand_radius` (None: graspd's default).
+    /// `hand_radius` (None: graspd's default), the approach onto the grasp `approach_s` long.
     pub fn reach(
         &self,
         start: &Isometry3<f64>,
         plan: &pb::PlanGraspResponse,
         scene: &RgbdImage,
         hand_radius: Option<f64>,
+        approach_s: f64,
     ) -> Result<pb::PlanReachResponse, tonic::Status> {
         let pose = |p: &Option<pb::Pose>| {
             graspd_api::convert::pose_from_proto(p, "")
@@ -176,9 +177,8 @@ impl Service {
             pregrasp_distance: Some((goal.translation.vector - pre.translation.vector).norm()),
             scene: Some(frame_to_proto(scene)),
             hand_radius,
-            // The approach as the standard trial's.
             options: Some(pb::ReachOptions {
-                approach_duration: crate::trial::APPROACH_S,
+                approach_duration: approach_s,
                 ..Default::default()
             }),
             ..Default::default()
