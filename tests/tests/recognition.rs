@@ -1,12 +1,13 @@
 //! The object by name through the real server (issue 18, part 1): `hints.object` picks the
 //! named object among several on the table (gRPC and REST), an absent or unknown name is
 //! NOT_FOUND / 404 naming the objects found, conflicting hints and a server without the
-//! recogniser are INVALID_ARGUMENT / 400 naming `hints.object`, and the next request works.
+//! recogniser are INVALID_ARGUMENT / 400 naming `hints.object`, and the next request works;
+//! graspctl names the object on its command line.
 
 use graspd::grpc::status::FIELD_METADATA_KEY;
 use graspd_api::convert::plan_from_proto;
 use graspd_core::perception::TargetChoice;
-use graspd_e2e::{Server, base64, http, rest_error, rgbd_frame_proto};
+use graspd_e2e::{Server, base64, binary, http, rest_error, rgbd_frame_proto};
 use graspd_proto::v1 as pb;
 use graspd_testkit::Object;
 use graspd_testkit::rgbd::{RgbdRender, RgbdScene, SceneObject};
@@ -111,6 +112,50 @@ async fn hints_object_plans_the_named_object() {
         recognised.iter().any(|o| o["class_name"] == "orange"),
         "{recognised:?}"
     );
+}
+
+/// graspctl plan --object on PNG files: the target is chosen by name; an absent one is an
+/// error naming the field.
+#[test]
+fn graspctl_plans_the_object_named_on_its_command_line() {
+    let server = Server::start();
+    let r = scene();
+    let dir = std::env::temp_dir().join(format!("graspd-recognition-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (rgb, depth) = (dir.join("rgb.png"), dir.join("depth.png"));
+    std::fs::write(&rgb, r.color_png()).unwrap();
+    std::fs::write(&depth, r.depth_png()).unwrap();
+    let k = r.intrinsics;
+    let plan = |name: &str| {
+        std::process::Command::new(binary("graspctl", "GRASPCTL_BIN"))
+            .env_remove("GRASPD_SERVER")
+            .args(["--server", &server.grpc_url(), "plan", "--hand", HAND])
+            .arg("--rgb")
+            .arg(&rgb)
+            .arg("--depth")
+            .arg(&depth)
+            .arg("--intrinsics")
+            .arg(format!("{},{},{},{}", k.fx, k.fy, k.cx, k.cy))
+            .args(["--object", name])
+            .output()
+            .unwrap()
+    };
+    let out = plan("orange");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("target by object"), "{stdout}");
+    let out = plan("banana");
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("hints.object") && stderr.contains("no banana in view"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[tokio::test]
