@@ -1,6 +1,7 @@
 //! The dual-stage grasp planner with pregrasping opposition (dissertation ch. 5.4, Algorithm 4).
 
 pub mod annealing;
+pub mod bayesian_search;
 pub mod collision;
 pub mod dual_stage;
 pub mod evaluation;
