@@ -127,6 +127,9 @@ fn hints_from_proto(h: Option<pb::PlanHints>) -> Result<(PlanHints, ImageHints),
         detected_attention: None,
         detected_types: None,
         seen_from: Vec::new(),
+        // Realising a given parallel grasp is not offered over the API yet (ch. 3's
+        // learned-quality search and its label generator use it in-process).
+        parallel_grasp: None,
     };
     let image = ImageHints {
         attention_pixel: h.attention_pixel.map(|p| (p.u, p.v)),

@@ -391,6 +391,9 @@ pub fn plan_request_from_json(
         detected_attention: None,
         detected_types: None,
         seen_from: Vec::new(),
+        // Realising a given parallel grasp is not offered over the API yet (ch. 3's
+        // learned-quality search and its label generator use it in-process).
+        parallel_grasp: None,
     };
     let image_hints = ImageHints {
         attention_pixel: h.attention_pixel.map(|p| (p.u, p.v)),

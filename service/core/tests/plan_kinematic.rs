@@ -360,6 +360,106 @@ fn the_squeeze_presses_contacts_by_the_set_depth_and_not_the_table() {
     }
 }
 
+/// A given parallel-jaw grasp g = {x, y, z, θ} (`hints.parallel_grasp`, ch. 3) is realised as
+/// given: the 2F-85 straight down onto a standing soup can, 2 cm below its top, its jaws
+/// closing along x and then along y — the approach is straight down, each jaw meets the can
+/// on the jaws' line on its side of the centre, the plan feasible. A hand described without
+/// its kinematics, a vertical jaw line and a centre above the can are refused naming the
+/// field.
+#[test]
+fn a_given_parallel_grasp_is_realised_straight_down() {
+    use graspd_core::PlanError;
+    use graspd_core::planning::parallel_grasp::ParallelGrasp;
+    use nalgebra::Vector3;
+    let gripper = model("robotiq_2f85/2f85.xml");
+    let v = standard_view(Object::TomatoSoupCan, 2000, 1);
+    let top = v.cloud.points.iter().map(|p| p.z).fold(f64::MIN, f64::max);
+    let centre = Point3::new(v.object_center.x, v.object_center.y, top - 0.02);
+    let plan_g = |m: &Arc<KinematicModel>, g: ParallelGrasp, kinematic: bool| {
+        plan(PlanInput {
+            cloud: v.object_cloud(),
+            hand: m.describe().unwrap(),
+            hints: PlanHints {
+                support_plane: Some(v.support_plane),
+                viewpoint: Some(v.viewpoint),
+                parallel_grasp: Some(g),
+                ..Default::default()
+            },
+            options: PlannerOptions {
+                seed: 1,
+                ..Default::default()
+            },
+            kinematics: kinematic.then(|| m.clone()),
+        })
+    };
+    for axis in [Vector3::x(), Vector3::y()] {
+        let p = plan_g(&gripper, ParallelGrasp { centre, axis }, true).unwrap();
+        println!(
+            "axis {axis:?}: feasible={} {:?} contacts {:?}",
+            p.feasible,
+            p.infeasible_reason,
+            p.contacts.iter().map(|c| c.position).collect::<Vec<_>>()
+        );
+        assert!(p.feasible, "{:?}", p.infeasible_reason);
+        assert_eq!(p.grasp_type.name(), "pinch");
+        let a = p.approach.unwrap();
+        assert!(a.dot(&-Vector3::z()) > 0.999, "approach {a:?}");
+        let jaws: Vec<&Point3<f64>> = p
+            .contacts
+            .iter()
+            .filter(|c| c.finger != "palm")
+            .map(|c| &c.position)
+            .collect();
+        assert!(jaws.len() >= 2);
+        let (lo, hi) = jaws
+            .iter()
+            .map(|q| (*q - centre).dot(&axis))
+            .fold((f64::MAX, f64::MIN), |(l, h), t| (l.min(t), h.max(t)));
+        // The can is 67 mm across: a jaw on each side of the centre.
+        assert!(
+            lo < -0.02 && hi > 0.02,
+            "along the jaws' line: {lo} .. {hi}"
+        );
+        // Each jaw's pad meets the can on the line (its other links may touch the rim too).
+        for side in [-1.0, 1.0] {
+            let nearest = jaws
+                .iter()
+                .filter(|q| (**q - centre).dot(&axis) * side > 0.0)
+                .map(|q| ((*q - centre) - axis * (*q - centre).dot(&axis)).norm())
+                .fold(f64::MAX, f64::min);
+            assert!(
+                nearest < 0.012,
+                "side {side}: no contact within 12 mm of the jaws' line"
+            );
+        }
+    }
+    let field_of = |r: Result<_, PlanError>| match r {
+        Err(PlanError::InvalidInput(e)) => e.field,
+        other => panic!("{:?}", other.map(|p: graspd_core::GraspPlan| p.feasible)),
+    };
+    let g = ParallelGrasp {
+        centre,
+        axis: Vector3::x(),
+    };
+    assert_eq!(field_of(plan_g(&gripper, g, false)), "hints.parallel_grasp");
+    let vertical = ParallelGrasp {
+        axis: Vector3::z(),
+        ..g
+    };
+    assert_eq!(
+        field_of(plan_g(&gripper, vertical, true)),
+        "hints.parallel_grasp.axis"
+    );
+    let above = ParallelGrasp {
+        centre: centre + Vector3::z() * 0.1,
+        ..g
+    };
+    assert_eq!(
+        field_of(plan_g(&gripper, above, true)),
+        "hints.parallel_grasp"
+    );
+}
+
 /// Same input and seed, same plan (all three joint sets included).
 #[test]
 fn kinematic_plans_are_deterministic() {

@@ -15,6 +15,7 @@ pub mod moveit_grasp;
 pub mod moveit_layout;
 pub mod object_shape;
 pub mod opposition;
+pub mod parallel_grasp;
 mod plan_assembly;
 mod planner;
 pub mod quality;

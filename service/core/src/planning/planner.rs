@@ -284,6 +284,17 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         approach_prefs: approach_prefs(&grasp),
     };
     let no_contacts = || FieldError::new("cloud", "no candidate contacts near the attention point");
+    if hints.parallel_grasp.is_some() && kinematics.is_none() {
+        return Err(FieldError::new(
+            "hints.parallel_grasp",
+            format!(
+                "hand '{}' has no kinematic model: a given grasp is realised with the hand's \
+                 joints",
+                hand.name
+            ),
+        )
+        .into());
+    }
     let (mut plan, t, grasp) = match kinematics.as_deref() {
         None => {
             let ctx = &base;
@@ -303,6 +314,69 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
                 })
                 .collect::<Result<_, PlanError>>()?;
             (plan, t, grasp.clone())
+        }
+        Some(model) if hints.parallel_grasp.is_some() => {
+            let field = "hints.parallel_grasp";
+            let up = up.ok_or_else(|| {
+                FieldError::new(
+                    field,
+                    "needs a support plane or hints.up: the gripper comes straight down",
+                )
+            })?;
+            let g = hints
+                .parallel_grasp
+                .as_ref()
+                .map(|g| g.checked(&up, field))
+                .transpose()?
+                .expect("checked above");
+            let pinch = hand
+                .resolve_forced(GraspType::Pinch)
+                .filter(|p| p.h1_fingers.len() == 1 && p.h2_fingers.len() == 1)
+                .ok_or_else(|| {
+                    FieldError::new(
+                        field,
+                        format!(
+                            "hand '{}' has no pinch between two single jaws: a parallel grasp \
+                             is a two-jaw gripper's",
+                            hand.name
+                        ),
+                    )
+                })?;
+            let opposition = g
+                .opposition(points, &index, hand.geometry.max_aperture / 2.0)
+                .ok_or_else(|| {
+                    FieldError::new(
+                        field,
+                        format!(
+                            "the jaws' line meets no object section within the hand's \
+                             opening ({:.0} mm) about the centre",
+                            hand.geometry.max_aperture * 1e3
+                        ),
+                    )
+                })?;
+            let ctx = base.for_grasp(&pinch, vec![-up]);
+            let t = Instant::now();
+            let finals: Vec<_> = final_configuration::realise(&ctx, model, opposition, &-up)?
+                .into_iter()
+                .collect();
+            let s2 = StageStats {
+                solution_space: finals.len() as f64,
+                candidates: finals.len(),
+                iterations: finals.len(),
+                evaluations: finals.len(),
+                feasible_found: finals.iter().any(|f| f.feasible),
+                seconds: t.elapsed().as_secs_f64(),
+                ..Default::default()
+            };
+            let plan = final_plan(
+                &ctx,
+                &finals,
+                &scene,
+                model,
+                (StageStats::default(), s2, true, None),
+                &[opposition],
+            )?;
+            (plan, t, pinch)
         }
         Some(model) => {
             // The detected type first, then (unless the caller forced one) the other types the

@@ -3,6 +3,7 @@
 
 use crate::cloud::Plane;
 use crate::grasp_type::GraspType;
+use crate::planning::parallel_grasp::ParallelGrasp;
 use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -147,4 +148,9 @@ pub struct PlanHints {
     /// P(s|O) for s = 1..6 from the grasp-type model over the ROI (Eq 4.3): the planner takes
     /// s* as the most probable type the hand realises. Ignored when `grasp_type` is set.
     pub detected_types: Option<[f64; 6]>,
+    /// Realise this parallel-jaw grasp g = {x, y, z, θ} (ch. 3) with the hand's kinematics,
+    /// straight down onto the table, instead of searching: a two-jaw gripper's pinch on the
+    /// two points its jaws meet ([`ParallelGrasp::opposition`]). Needs the hand's model and a
+    /// support plane or `up`.
+    pub parallel_grasp: Option<ParallelGrasp>,
 }

@@ -245,6 +245,54 @@ struct Grasp<'m> {
     free: Vec<usize>,
 }
 
+impl<'m> Grasp<'m> {
+    /// The request's grasp realised by `model`; None when the hand has no pre-shape for it.
+    fn of(ctx: &SearchContext, model: &'m KinematicModel) -> Option<Self> {
+        let kin = |desc: &[usize]| -> Vec<usize> {
+            desc.iter()
+                .filter_map(|&i| model.hand.finger_index(&ctx.hand.fingers[i].name))
+                .collect()
+        };
+        let h1 = kin(&ctx.grasp.h1_fingers);
+        let h2 = kin(&ctx.grasp.h2_fingers);
+        let pres = model.pre_shapes(&h1, &h2).filter(|p| !p.is_empty())?;
+        let taking_part: Vec<usize> = h1.iter().chain(&h2).copied().collect();
+        Some(Grasp {
+            pres,
+            wrap: ctx.grasp.grasp_type.is_power(),
+            free: (0..model.hand.fingers.len())
+                .filter(|f| !taking_part.contains(f))
+                .collect(),
+            taking_part,
+        })
+    }
+}
+
+/// The final configuration of one given candidate — `opposition` approached along `approach`,
+/// the pre-shape's openings tried, no turns about the approach and no other candidate (a
+/// grasp the caller chose, `PlanHints::parallel_grasp`); None when the hand has no pre-shape
+/// for the grasp or cannot start.
+pub fn realise(
+    ctx: &SearchContext,
+    model: &KinematicModel,
+    opposition: (usize, usize),
+    approach: &Vector3<f64>,
+) -> Result<Option<FinalConfiguration>, FieldError> {
+    let Some(grasp) = Grasp::of(ctx, model) else {
+        return Ok(None);
+    };
+    let object = ObjectView::new(ctx.points, ctx.normals, ctx.plane.as_ref());
+    // Any score enters, and a finite bar keeps the hand from turning about the approach.
+    let beat = Beat {
+        feasible: f64::MIN,
+        infeasible: Some(f64::MIN),
+    };
+    let Some(c) = judge(ctx, model, &grasp, &object, opposition, approach, beat)? else {
+        return Ok(None);
+    };
+    Ok(Some(c.completed(ctx, model, &object)?.with_robustness(ctx)))
+}
+
 /// Searches the final configurations on `oppositions` (best first) and returns up to `want`
 /// distinct ones, feasible first, best first; empty when the hand has no pre-shape for the
 /// grasp.
@@ -254,24 +302,8 @@ pub fn search(
     oppositions: &[(usize, usize)],
     want: usize,
 ) -> Result<Vec<FinalConfiguration>, FieldError> {
-    let kin = |desc: &[usize]| -> Vec<usize> {
-        desc.iter()
-            .filter_map(|&i| model.hand.finger_index(&ctx.hand.fingers[i].name))
-            .collect()
-    };
-    let h1 = kin(&ctx.grasp.h1_fingers);
-    let h2 = kin(&ctx.grasp.h2_fingers);
-    let Some(pres) = model.pre_shapes(&h1, &h2).filter(|p| !p.is_empty()) else {
+    let Some(grasp) = Grasp::of(ctx, model) else {
         return Ok(Vec::new());
-    };
-    let taking_part: Vec<usize> = h1.iter().chain(&h2).copied().collect();
-    let grasp = Grasp {
-        pres,
-        wrap: ctx.grasp.grasp_type.is_power(),
-        free: (0..model.hand.fingers.len())
-            .filter(|f| !taking_part.contains(f))
-            .collect(),
-        taking_part,
     };
     let object = ObjectView::new(ctx.points, ctx.normals, ctx.plane.as_ref());
     let order = candidate_order(ctx, oppositions);

@@ -1,0 +1,220 @@
+//! A parallel-jaw grasp given by its configuration g = {x, y, z, θ} (dissertation §3.2.2,
+//! Figure 3.3 (a)): the jaws' centre and the line they close along, the gripper coming straight
+//! down onto the table. This is what the learned-quality search (ch. 3) chooses among and
+//! what its training labels were executed with; `PlanHints::parallel_grasp` has graspd
+//! realise one with the hand's kinematics (`final_configuration::realise`).
+
+use crate::cloud::{CloudIndex, tangents};
+use crate::error::FieldError;
+use nalgebra::{Point3, Vector3};
+
+/// Object points this close to the jaws' line are what the jaws close on, m (about a jaw pad's
+/// half width).
+pub const JAW_TUBE: f64 = 0.006;
+/// Least distance between the two jaws' contacts, m: a thinner section is no opposition.
+pub const MIN_SPAN: f64 = 0.004;
+
+/// g = {x, y, z, θ}: the jaws' centre (x, y on the table, z its height) and the horizontal
+/// line they close along (θ).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParallelGrasp {
+    /// The jaws' centre in the cloud's frame.
+    pub centre: Point3<f64>,
+    /// Unit direction the jaws close along (either sense), perpendicular to `up`.
+    pub axis: Vector3<f64>,
+}
+
+impl ParallelGrasp {
+    /// g from its table-frame configuration: (x, y) and z along the table frame's axes
+    /// (`frame`: origin on the table, unit x, y in it and z up) and θ from its x axis.
+    pub fn from_configuration(
+        frame: &TableFrame,
+        x: f64,
+        y: f64,
+        z: f64,
+        theta: f64,
+    ) -> ParallelGrasp {
+        ParallelGrasp {
+            centre: frame.origin + frame.x * x + frame.y * y + frame.z * z,
+            axis: frame.x * theta.cos() + frame.y * theta.sin(),
+        }
+    }
+
+    /// The grasp checked against `up` (the table's normal): a finite centre, and an axis of
+    /// some length that is turned into the table's plane (a tilted axis is projected onto it).
+    pub fn checked(&self, up: &Vector3<f64>, field: &str) -> Result<ParallelGrasp, FieldError> {
+        if !(self.centre.coords.iter().all(|v| v.is_finite())) {
+            return Err(FieldError::new(
+                format!("{field}.centre"),
+                "must be finite".to_string(),
+            ));
+        }
+        let flat = self.axis - up * self.axis.dot(up);
+        let Some(axis) = flat.try_normalize(1e-6).filter(|_| self.axis.norm() > 1e-6) else {
+            return Err(FieldError::new(
+                format!("{field}.axis"),
+                "must be a direction with a component along the table (the jaws close \
+                 horizontally; the gripper comes straight down)"
+                    .to_string(),
+            ));
+        };
+        Ok(ParallelGrasp {
+            centre: self.centre,
+            axis,
+        })
+    }
+
+    /// The opposition the jaws close on: among the object points within [`JAW_TUBE`] of the
+    /// jaws' line and within `half_opening` of the centre along it, the two outermost (the
+    /// first each jaw meets); None when the jaws hold nothing or a section thinner than
+    /// [`MIN_SPAN`].
+    pub fn opposition(
+        &self,
+        points: &[Point3<f64>],
+        index: &CloudIndex,
+        half_opening: f64,
+    ) -> Option<(usize, usize)> {
+        let radius = (half_opening * half_opening + JAW_TUBE * JAW_TUBE).sqrt();
+        let mut lo: Option<(usize, f64)> = None;
+        let mut hi: Option<(usize, f64)> = None;
+        for i in index.within_unsorted(&self.centre, radius) {
+            let d = points[i] - self.centre;
+            let t = d.dot(&self.axis);
+            if t.abs() > half_opening || (d - self.axis * t).norm() > JAW_TUBE {
+                continue;
+            }
+            if lo.is_none_or(|(_, l)| t < l) {
+                lo = Some((i, t));
+            }
+            if hi.is_none_or(|(_, h)| t > h) {
+                hi = Some((i, t));
+            }
+        }
+        let ((a, ta), (b, tb)) = (lo?, hi?);
+        (tb - ta >= MIN_SPAN).then_some((a, b))
+    }
+}
+
+/// A frame on the table: origin on it, z its normal (up), x and y in it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TableFrame {
+    pub origin: Point3<f64>,
+    pub x: Vector3<f64>,
+    pub y: Vector3<f64>,
+    pub z: Vector3<f64>,
+}
+
+impl TableFrame {
+    /// The frame of the plane with normal `up` that lies `height_of_over` below `over`, its
+    /// in-plane axes [`tangents`] of `up`.
+    pub fn under(over: &Point3<f64>, up: &Vector3<f64>, height_of_over: f64) -> TableFrame {
+        let z = up.normalize();
+        let (x, y) = tangents(&z);
+        TableFrame {
+            origin: over - z * height_of_over,
+            x,
+            y,
+            z,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 60 × 40 × 30 mm box's visible faces, 2 mm apart, on a table at z = 0.
+    fn box_points() -> Vec<Point3<f64>> {
+        let mut p = Vec::new();
+        for i in 0..=30 {
+            for j in 0..=20 {
+                let (x, y) = (-0.03 + i as f64 * 0.002, -0.02 + j as f64 * 0.002);
+                p.push(Point3::new(x, y, 0.03));
+            }
+            for k in 0..=15 {
+                let (x, z) = (-0.03 + i as f64 * 0.002, k as f64 * 0.002);
+                p.push(Point3::new(x, -0.02, z));
+                p.push(Point3::new(x, 0.02, z));
+            }
+        }
+        for j in 0..=20 {
+            for k in 0..=15 {
+                let (y, z) = (-0.02 + j as f64 * 0.002, k as f64 * 0.002);
+                p.push(Point3::new(-0.03, y, z));
+                p.push(Point3::new(0.03, y, z));
+            }
+        }
+        p
+    }
+
+    /// Jaws closing along y at the box's mid-height meet its ±20 mm faces; along x, its
+    /// ±30 mm ends; above the box, or opened too little to reach the ends, nothing.
+    #[test]
+    fn the_jaws_close_on_the_outermost_points_of_their_line() {
+        let points = box_points();
+        let index = CloudIndex::new(&points);
+        let g = ParallelGrasp {
+            centre: Point3::new(0.004, 0.0, 0.015),
+            axis: Vector3::y(),
+        };
+        let (a, b) = g.opposition(&points, &index, 0.0425).unwrap();
+        assert!((points[a].y + 0.02).abs() < 1e-9 && (points[b].y - 0.02).abs() < 1e-9);
+        assert!((points[a].x - 0.004).abs() <= JAW_TUBE && (points[a].z - 0.015).abs() <= JAW_TUBE);
+        let g = ParallelGrasp {
+            axis: -Vector3::x(),
+            ..g
+        };
+        let (a, b) = g.opposition(&points, &index, 0.0425).unwrap();
+        assert!((points[a].x - 0.03).abs() < 1e-9 && (points[b].x + 0.03).abs() < 1e-9);
+        let above = ParallelGrasp {
+            centre: Point3::new(0.0, 0.0, 0.05),
+            ..g
+        };
+        assert_eq!(above.opposition(&points, &index, 0.0425), None);
+        // Opened 25 mm each side along x the jaws reach neither end face (the box is 60 mm
+        // long): nothing between them.
+        assert_eq!(g.opposition(&points, &index, 0.025), None);
+    }
+
+    /// g from {x, y, z, θ} in a table frame, and the checks naming the field.
+    #[test]
+    fn configuration_and_checks() {
+        let frame = TableFrame::under(&Point3::new(0.1, 0.2, 0.5), &Vector3::z(), 0.5);
+        assert!((frame.origin - Point3::new(0.1, 0.2, 0.0)).norm() < 1e-12);
+        assert!((frame.x.cross(&frame.y) - frame.z).norm() < 1e-12 && frame.x.dot(&frame.z) == 0.0);
+        let g = ParallelGrasp::from_configuration(
+            &frame,
+            0.01,
+            0.02,
+            0.03,
+            std::f64::consts::FRAC_PI_2,
+        );
+        let want = frame.origin + frame.x * 0.01 + frame.y * 0.02 + Vector3::z() * 0.03;
+        assert!((g.centre - want).norm() < 1e-12 && (g.centre.z - 0.03).abs() < 1e-12);
+        assert!((g.axis - frame.y).norm() < 1e-12);
+        let tilted = ParallelGrasp {
+            axis: Vector3::new(1.0, 0.0, 1.0),
+            ..g
+        };
+        let flat = tilted
+            .checked(&Vector3::z(), "hints.parallel_grasp")
+            .unwrap();
+        assert!((flat.axis - Vector3::x()).norm() < 1e-12);
+        let vertical = ParallelGrasp {
+            axis: Vector3::z(),
+            ..g
+        };
+        let e = vertical
+            .checked(&Vector3::z(), "hints.parallel_grasp")
+            .unwrap_err();
+        assert_eq!(e.field, "hints.parallel_grasp.axis");
+        let nan = ParallelGrasp {
+            centre: Point3::new(f64::NAN, 0.0, 0.0),
+            ..g
+        };
+        let e = nan
+            .checked(&Vector3::z(), "hints.parallel_grasp")
+            .unwrap_err();
+        assert_eq!(e.field, "hints.parallel_grasp.centre");
+    }
+}
