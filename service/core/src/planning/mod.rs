@@ -8,6 +8,7 @@ pub mod evaluation;
 pub mod ferrari_canny;
 pub mod final_configuration;
 pub mod grasp_plan;
+pub mod grasp_quality;
 pub mod grip_forces;
 pub mod hand_pose;
 pub mod kinematic_model;

@@ -13,6 +13,9 @@ use nalgebra::{Point3, Vector3};
 pub const JAW_TUBE: f64 = 0.006;
 /// Least distance between the two jaws' contacts, m: a thinner section is no opposition.
 pub const MIN_SPAN: f64 = 0.004;
+/// Room a jaw needs beyond the opening to come down beside the object, m (a jaw's thickness
+/// and a margin).
+pub const JAW_CLEARANCE: f64 = 0.015;
 
 /// g = {x, y, z, θ}: the jaws' centre (x, y on the table, z its height) and the horizontal
 /// line they close along (θ).
@@ -66,22 +69,27 @@ impl ParallelGrasp {
 
     /// The opposition the jaws close on: among the object points within [`JAW_TUBE`] of the
     /// jaws' line and within `half_opening` of the centre along it, the two outermost (the
-    /// first each jaw meets); None when the jaws hold nothing or a section thinner than
-    /// [`MIN_SPAN`].
+    /// first each jaw meets); None when the jaws hold nothing, a section thinner than
+    /// [`MIN_SPAN`], or the object goes on past a jaw (within [`JAW_CLEARANCE`] beyond the
+    /// opening: the jaw would come down on it).
     pub fn opposition(
         &self,
         points: &[Point3<f64>],
         index: &CloudIndex,
         half_opening: f64,
     ) -> Option<(usize, usize)> {
-        let radius = (half_opening * half_opening + JAW_TUBE * JAW_TUBE).sqrt();
+        let reach = half_opening + JAW_CLEARANCE;
+        let radius = (reach * reach + JAW_TUBE * JAW_TUBE).sqrt();
         let mut lo: Option<(usize, f64)> = None;
         let mut hi: Option<(usize, f64)> = None;
         for i in index.within_unsorted(&self.centre, radius) {
             let d = points[i] - self.centre;
             let t = d.dot(&self.axis);
-            if t.abs() > half_opening || (d - self.axis * t).norm() > JAW_TUBE {
+            if t.abs() > reach || (d - self.axis * t).norm() > JAW_TUBE {
                 continue;
+            }
+            if t.abs() > half_opening {
+                return None;
             }
             if lo.is_none_or(|(_, l)| t < l) {
                 lo = Some((i, t));
@@ -92,6 +100,27 @@ impl ParallelGrasp {
         }
         let ((a, ta), (b, tb)) = (lo?, hi?);
         (tb - ta >= MIN_SPAN).then_some((a, b))
+    }
+
+    /// The grasp moved along its line to the middle of the section its jaws close on (where
+    /// a gripper whose jaws close symmetrically is put), with that opposition; None as
+    /// [`Self::opposition`].
+    pub fn centred(
+        &self,
+        points: &[Point3<f64>],
+        index: &CloudIndex,
+        half_opening: f64,
+    ) -> Option<(ParallelGrasp, (usize, usize))> {
+        let (a, b) = self.opposition(points, index, half_opening)?;
+        let mid = ((points[a] - self.centre).dot(&self.axis)
+            + (points[b] - self.centre).dot(&self.axis))
+            / 2.0;
+        let g = ParallelGrasp {
+            centre: self.centre + self.axis * mid,
+            axis: self.axis,
+        };
+        let o = g.opposition(points, index, half_opening)?;
+        Some((g, o))
     }
 }
 
@@ -174,6 +203,14 @@ mod tests {
         // Opened 25 mm each side along x the jaws reach neither end face (the box is 60 mm
         // long): nothing between them.
         assert_eq!(g.opposition(&points, &index, 0.025), None);
+        // Off centre by 10 mm along y the jaws still span the 40 mm section; centred, the
+        // grasp sits at its middle.
+        let off = ParallelGrasp {
+            centre: Point3::new(0.004, 0.01, 0.015),
+            axis: Vector3::y(),
+        };
+        let (c, (a, b)) = off.centred(&points, &index, 0.0425).unwrap();
+        assert!(c.centre.y.abs() < 1e-9 && (points[b].y - points[a].y - 0.04).abs() < 1e-9);
     }
 
     /// g from {x, y, z, θ} in a table frame, and the checks naming the field.
