@@ -166,6 +166,71 @@ impl SimObject {
     }
 }
 
+/// A generated primitive object for grasp labels on shapes beyond the YCB scans
+/// (`labels.rs`): by `seed`, a box (20–90 × 20–90 × 20–120 mm), an upright cylinder (25–90 mm
+/// across, 30–130 mm tall) or a lying one (25–80 mm across, 60–160 mm long), of a density of
+/// 300–900 kg/m³; one convex piece, recentred as the YCB objects are.
+pub fn primitive(seed: u64) -> SimObject {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_0b1e);
+    let mut u = |lo: f64, hi: f64| rng.random_range(lo..hi);
+    let kind = (u(0.0, 3.0)) as usize;
+    let ring = |r: f64, along: &dyn Fn(f64, f64) -> Point3<f64>| -> Vec<Point3<f64>> {
+        (0..24)
+            .map(|k| {
+                let a = k as f64 / 24.0 * std::f64::consts::TAU;
+                along(r * a.cos(), r * a.sin())
+            })
+            .collect()
+    };
+    let (name, piece, volume) = match kind {
+        0 => {
+            let (w, d, h) = (u(0.02, 0.09), u(0.02, 0.09), u(0.02, 0.12));
+            let piece = [-1.0, 1.0]
+                .iter()
+                .flat_map(|&sx| {
+                    [-1.0, 1.0].iter().flat_map(move |&sy| {
+                        [0.0, h].map(|z| Point3::new(sx * w / 2.0, sy * d / 2.0, z))
+                    })
+                })
+                .collect();
+            let name = format!("box_{:.0}x{:.0}x{:.0}", w * 1e3, d * 1e3, h * 1e3);
+            (name, piece, w * d * h)
+        }
+        1 => {
+            let (r, h) = (u(0.0125, 0.045), u(0.03, 0.13));
+            let mut piece = ring(r, &|x, y| Point3::new(x, y, 0.0));
+            piece.extend(ring(r, &|x, y| Point3::new(x, y, h)));
+            let name = format!("cylinder_{:.0}x{:.0}", 2e3 * r, h * 1e3);
+            (name, piece, std::f64::consts::PI * r * r * h)
+        }
+        _ => {
+            let (r, l) = (u(0.0125, 0.04), u(0.06, 0.16));
+            let mut piece = ring(r, &|y, z| Point3::new(-l / 2.0, y, z + r));
+            piece.extend(ring(r, &|y, z| Point3::new(l / 2.0, y, z + r)));
+            let name = format!("lying_cylinder_{:.0}x{:.0}", 2e3 * r, l * 1e3);
+            (name, piece, std::f64::consts::PI * r * r * l)
+        }
+    };
+    let density = u(300.0, 900.0);
+    let grey = u(0.3, 0.8) as f32;
+    let (mut lo, mut hi) = (
+        Vector3::repeat(f64::INFINITY),
+        Vector3::repeat(f64::NEG_INFINITY),
+    );
+    for p in &piece {
+        lo = lo.inf(&p.coords);
+        hi = hi.sup(&p.coords);
+    }
+    SimObject {
+        name,
+        pieces: vec![piece],
+        mass: density * volume,
+        extents: hi - lo,
+        rgb: [grey, grey * 0.9, grey * 0.8],
+    }
+}
+
 /// Vertices and triangles of an STL (binary or ASCII) or OBJ file.
 /// A triangle soup: vertices and vertex-index triples.
 type Soup = (Vec<Point3<f64>>, Vec<[usize; 3]>);

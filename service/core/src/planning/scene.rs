@@ -11,7 +11,7 @@ use crate::error::FieldError;
 use nalgebra::{Point3, Vector3};
 
 /// Points closer than this to the support plane belong to the table (sensor noise band), m.
-const PLANE_BAND: f64 = 0.004;
+pub(crate) const PLANE_BAND: f64 = 0.004;
 
 /// The support plane and the object's points above it.
 pub(super) struct Scene {

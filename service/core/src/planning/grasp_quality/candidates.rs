@@ -8,8 +8,9 @@
 //! line to the middle of the section the jaws close on; kept when they enclose it within the
 //! opening less 5 mm ([`ParallelGrasp::centred`]).
 
-use crate::cloud::CloudIndex;
+use crate::cloud::{CloudIndex, Plane, symmetric_completion};
 use crate::planning::parallel_grasp::{ParallelGrasp, TableFrame};
+use crate::planning::scene::PLANE_BAND;
 use nalgebra::Point3;
 use rand::{Rng, RngExt};
 
@@ -22,6 +23,25 @@ const ATTEMPTS: usize = 20;
 /// Features' length unit for the search's kernel, m: qualities of grasps this far apart are
 /// alike (about a jaw pad's width).
 pub const FEATURE_UNIT: f64 = 0.02;
+
+/// The object as the planner sees it from one view: the visible points above the table's noise
+/// band (`scene::PLANE_BAND`), and those with the unseen side completed
+/// (`cloud::symmetric_completion`, as `plan` does) — the crop is made of the first, the
+/// candidates are sampled on the second.
+pub fn object_from_view(
+    points: &[Point3<f64>],
+    plane: &Plane,
+    viewpoint: &Point3<f64>,
+) -> (Vec<Point3<f64>>, Vec<Point3<f64>>) {
+    let visible: Vec<Point3<f64>> = points
+        .iter()
+        .filter(|p| plane.distance(p) >= PLANE_BAND)
+        .copied()
+        .collect();
+    let completed = symmetric_completion(&visible, viewpoint, &plane.normal, Some(plane))
+        .map_or_else(|| visible.clone(), |c| c.points);
+    (visible, completed)
+}
 
 /// Up to `n` candidates on the object whose points (visible and completed) are `points`
 /// (indexed by `index`) on `table`, for jaws that open `max_opening`.
