@@ -145,9 +145,73 @@ pub(crate) fn tensor_info(t: &ValueType) -> Option<(TensorElementType, &[i64], &
     }
 }
 
+/// Checks that `session` has exactly the float32 inputs `expect` (name, dims after the batch),
+/// naming what it found against what the contract needs.
+pub(crate) fn check_float_inputs(
+    session: &ort::session::Session,
+    expect: &[(&str, &[i64])],
+) -> Result<(), String> {
+    let wanted = || {
+        expect
+            .iter()
+            .map(|(n, d)| {
+                let dims: Vec<String> = d.iter().map(|x| x.to_string()).collect();
+                format!("{n} [N, {}]", dims.join(", "))
+            })
+            .collect::<Vec<_>>()
+            .join(" and ")
+    };
+    if session.inputs().len() != expect.len() {
+        return Err(format!(
+            "the model has {} inputs; the contract needs {}: {}, float32",
+            session.inputs().len(),
+            expect.len(),
+            wanted()
+        ));
+    }
+    for (name, dims) in expect {
+        let input = session
+            .inputs()
+            .iter()
+            .find(|i| i.name() == *name)
+            .ok_or_else(|| format!("the model has no input named '{name}'"))?;
+        let (ty, d, syms) =
+            tensor_info(input.dtype()).ok_or_else(|| format!("input '{name}' is not a tensor"))?;
+        if ty != TensorElementType::Float32 || d.len() != dims.len() + 1 || d[1..] != dims[..] {
+            return Err(format!(
+                "input '{name}' is {ty} {}; the contract needs float32 [N, {}]",
+                fmt_dims(d, syms),
+                dims.iter()
+                    .map(|x| x.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The softmax of one row of logits.
+pub(crate) fn softmax(logits: &[f32]) -> Vec<f64> {
+    let m = logits.iter().copied().fold(f32::NEG_INFINITY, f32::max) as f64;
+    let e: Vec<f64> = logits.iter().map(|&x| (x as f64 - m).exp()).collect();
+    let sum: f64 = e.iter().sum();
+    e.into_iter().map(|x| x / sum).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn softmax_sums_to_one_and_keeps_the_order() {
+        let p = softmax(&[1.0, 3.0, 2.0]);
+        assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        // e^0 / (e^-2 + e^0 + e^-1)
+        let z = (-2.0f64).exp() + 1.0 + (-1.0f64).exp();
+        assert!((p[1] - 1.0 / z).abs() < 1e-12);
+        assert!(p[1] > p[2] && p[2] > p[0]);
+    }
 
     #[test]
     fn an_unloadable_library_is_named() {

@@ -541,12 +541,12 @@ fn contract_violations_are_named_at_load() {
     let good = color_model(None, 1).build();
     let e = load_err("truncated", &good[..good.len() / 2]);
     assert!(
-        e.contains("cannot load the grasp-type model") && e.contains("grasp_type_truncated.onnx"),
+        e.contains("cannot load the model") && e.contains("grasp_type_truncated.onnx"),
         "{e}"
     );
     let e = load_err("garbage", b"this is not an ONNX model at all \x00\xff\x13");
     assert!(
-        e.contains("cannot load the grasp-type model") && e.contains("grasp_type_garbage.onnx"),
+        e.contains("cannot load the model") && e.contains("grasp_type_garbage.onnx"),
         "{e}"
     );
     init();

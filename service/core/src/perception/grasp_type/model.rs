@@ -25,15 +25,15 @@ pub enum ModelError {
     /// ONNX Runtime itself is missing or failed to load.
     #[error(transparent)]
     Runtime(#[from] RuntimeError),
-    #[error("cannot load the grasp-type model {}: {reason}", path.display())]
+    #[error("cannot load the model {}: {reason}", path.display())]
     Load { path: PathBuf, reason: String },
     #[error(
-        "the grasp-type model {} does not follow the model contract (docs/model-contract.md): \
+        "the model {} does not follow the model contract (docs/model-contract.md): \
          {reason}",
         path.display()
     )]
     Contract { path: PathBuf, reason: String },
-    #[error("grasp-type inference failed: {0}")]
+    #[error("model inference failed: {0}")]
     Inference(String),
 }
 

@@ -4,7 +4,9 @@
 //! `graspd.classes` names (comma-separated, one of them `unknown`); graspd applies the softmax.
 
 use super::crop::{CROP_CHANNELS, CROP_SIDE, ObjectCrop, SIZE_FEATURES};
-use crate::onnx_runtime::{SessionError, fmt_dims, session_from_memory, tensor_info};
+use crate::onnx_runtime::{
+    SessionError, check_float_inputs, fmt_dims, session_from_memory, softmax, tensor_info,
+};
 use crate::perception::grasp_type::{ModelError, read_model_file};
 use ort::session::Session;
 use ort::value::{TensorElementType, TensorRef};
@@ -98,48 +100,18 @@ impl RecognitionModel {
     }
 }
 
-fn softmax(logits: &[f32]) -> Vec<f64> {
-    let m = logits.iter().copied().fold(f32::NEG_INFINITY, f32::max) as f64;
-    let e: Vec<f64> = logits.iter().map(|&x| (x as f64 - m).exp()).collect();
-    let sum: f64 = e.iter().sum();
-    e.into_iter().map(|x| x / sum).collect()
-}
-
 /// Checks the inputs, the output and the metadata; returns the classes.
 fn check_contract(session: &Session) -> Result<Vec<String>, String> {
-    let expect = [
-        (
-            "crop",
-            vec![CROP_CHANNELS as i64, CROP_SIDE as i64, CROP_SIDE as i64],
-        ),
-        ("size", vec![SIZE_FEATURES as i64]),
-    ];
-    if session.inputs().len() != 2 {
-        return Err(format!(
-            "the model has {} inputs; the contract needs two: crop [N, {CROP_CHANNELS}, \
-             {CROP_SIDE}, {CROP_SIDE}] and size [N, {SIZE_FEATURES}], float32",
-            session.inputs().len()
-        ));
-    }
-    for (name, dims) in &expect {
-        let input = session
-            .inputs()
-            .iter()
-            .find(|i| i.name() == *name)
-            .ok_or_else(|| format!("the model has no input named '{name}'"))?;
-        let (ty, d, syms) =
-            tensor_info(input.dtype()).ok_or_else(|| format!("input '{name}' is not a tensor"))?;
-        if ty != TensorElementType::Float32 || d.len() != dims.len() + 1 || d[1..] != dims[..] {
-            return Err(format!(
-                "input '{name}' is {ty} {}; the contract needs float32 [N, {}]",
-                fmt_dims(d, syms),
-                dims.iter()
-                    .map(|x| x.to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-        }
-    }
+    check_float_inputs(
+        session,
+        &[
+            (
+                "crop",
+                &[CROP_CHANNELS as i64, CROP_SIDE as i64, CROP_SIDE as i64],
+            ),
+            ("size", &[SIZE_FEATURES as i64]),
+        ],
+    )?;
     if session.outputs().len() != 1 {
         return Err(format!(
             "the model has {} outputs; the contract needs one, [N, K] float32 logits",
@@ -174,19 +146,4 @@ fn check_contract(session: &Session) -> Result<Vec<String>, String> {
         ));
     }
     Ok(classes)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn softmax_sums_to_one_and_keeps_the_order() {
-        let p = softmax(&[1.0, 3.0, 2.0]);
-        assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-12);
-        // e^0 / (e^-2 + e^0 + e^-1)
-        let z = (-2.0f64).exp() + 1.0 + (-1.0f64).exp();
-        assert!((p[1] - 1.0 / z).abs() < 1e-12);
-        assert!(p[1] > p[2] && p[2] > p[0]);
-    }
 }
