@@ -3,7 +3,7 @@ CARGO ?= cargo
 # Extra flags for `make run`, e.g. make run ARGS="--rest-addr 127.0.0.1:8081 --log-format json"
 ARGS ?=
 
-.PHONY: build run test fmt lint fuzz models models-grasp-type models-tactile models-recogniser sim-bench sim-stabilize sim-clutter
+.PHONY: build run test fmt lint fuzz models models-grasp-type models-tactile models-recogniser models-grasp-quality sim-bench sim-stabilize sim-clutter
 
 # The ONNX Runtime library that ort loads at run time (grasp-type model, docs/model-contract.md);
 # `run` and `test` fetch it first with scripts/fetch-onnxruntime.sh.
@@ -56,7 +56,7 @@ fuzz:
 # PyTorch into .tools/models-venv, generates the data with fixed seeds, trains, exports the ONNX
 # files over the committed ones and checks them against PyTorch. About 20 + 10 + 12 minutes on two
 # cores; never run by CI.
-models: models-grasp-type models-tactile models-recogniser
+models: models-grasp-type models-tactile models-recogniser models-grasp-quality
 
 models-grasp-type:
 	models/grasp_type/train.sh
@@ -66,6 +66,10 @@ models-tactile:
 
 models-recogniser:
 	models/recogniser/train.sh
+
+# Labels sampled 2F-85 grasps in MuJoCo (about 27 min on 2 cores), then trains (about 8 min).
+models-grasp-quality:
+	models/grasp_quality/train.sh
 
 # The grasp benchmark in MuJoCo (clients/sim/README.md, docs/sim-benchmark.md): starts a release
 # graspd on loopback and runs graspd-sim bench with the Robotiq 2F-85, Barrett, Shadow and Allegro

@@ -58,6 +58,7 @@ impl From<PlanError> for ServiceError {
             PlanError::InvalidInput(f) => ServiceError::InvalidArgument(f),
             PlanError::NotFound(f) => ServiceError::NotFound(f),
             PlanError::Unimplemented(m) => ServiceError::Unimplemented(m),
+            PlanError::Model(m) => ServiceError::Internal(m),
         }
     }
 }

@@ -8,7 +8,8 @@
 
 use graspd_core::perception::{PerceptionTimings, TargetChoice};
 use graspd_core::planning::{
-    CollisionReport, PlaneSource, PlannerMode, Quality, StageStats, Timings, TypeSource,
+    CollisionReport, LearnedQuality, PlaneSource, PlannerMode, Quality, StageStats, Timings,
+    TypeSource,
 };
 use graspd_core::tactile::{ElectrodePolarity, ModelFreeThresholds, PidGains};
 use graspd_core::{GraspType, HandPart, PlannerOptions};
@@ -245,7 +246,11 @@ doc_schema!(
     "PlannerMode",
     enum_schema!(
         PlannerMode,
-        [PlannerMode::DualStage, PlannerMode::WithoutOpposition],
+        [
+            PlannerMode::DualStage,
+            PlannerMode::WithoutOpposition,
+            PlannerMode::LearnedQuality
+        ],
         "The planner's mode"
     )
 );
@@ -300,6 +305,23 @@ doc_schema!(
             gravity_resistance: 0.0,
         },
         "Quality of the final grasp (graspd_core::planning::Quality)"
+    )
+);
+
+doc_schema!(
+    LearnedQualityDoc,
+    "LearnedQuality",
+    shape(
+        &LearnedQuality {
+            probability: 0.0,
+            posterior_mean: 0.0,
+            posterior_std: 0.0,
+            network_calls: 0,
+            candidates: 0,
+        },
+        "The learned-quality search's result (graspd_core::planning::LearnedQuality): the \
+         network's P(success) of the executed grasp, the Gaussian process's posterior there, \
+         the network calls made and the candidates chosen among"
     )
 );
 

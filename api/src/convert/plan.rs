@@ -11,7 +11,8 @@ use crate::request::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSou
 use graspd_core::cloud::{PointCloud, decode_packed_vec3, decode_packed_xyz, encode_packed_xyz};
 use graspd_core::perception::{CameraIntrinsics, RgbdFrame, WireImage, camera_pose};
 use graspd_core::planning::{
-    CollisionReport, Contact, GraspCandidate, Opposition, Pose, Quality, StageStats, Timings,
+    CollisionReport, Contact, GraspCandidate, LearnedQuality, Opposition, Pose, Quality,
+    StageStats, Timings,
 };
 use graspd_core::{FieldError, GraspPlan, PlanHints, PlannerOptions};
 use graspd_proto::v1 as pb;
@@ -526,6 +527,13 @@ pub fn plan_to_proto(p: &GraspPlan) -> pb::PlanGraspResponse {
         candidates: p.candidates.iter().map(candidate_to_proto).collect(),
         moveit_grasps: p.moveit_grasps.iter().map(moveit_grasp_to_proto).collect(),
         scene_glb: p.scene_glb.clone().unwrap_or_default(),
+        learned_quality: p.learned_quality.as_ref().map(|l| pb::LearnedQuality {
+            probability: l.probability,
+            posterior_mean: l.posterior_mean,
+            posterior_std: l.posterior_std,
+            network_calls: l.network_calls as u32,
+            candidates: l.candidates as u32,
+        }),
         quality: Some(quality_to_proto(q)),
         feasible: p.feasible,
         infeasible_reason: p.infeasible_reason.clone(),
@@ -668,5 +676,12 @@ pub fn plan_from_proto(p: pb::PlanGraspResponse) -> Result<GraspPlan, FieldError
             .transpose()?,
         moveit_grasps,
         scene_glb: (!p.scene_glb.is_empty()).then_some(p.scene_glb),
+        learned_quality: p.learned_quality.map(|l| LearnedQuality {
+            probability: l.probability,
+            posterior_mean: l.posterior_mean,
+            posterior_std: l.posterior_std,
+            network_calls: l.network_calls as usize,
+            candidates: l.candidates as usize,
+        }),
     })
 }

@@ -133,6 +133,7 @@ pub fn mode_to_proto(m: PlannerMode) -> pb::PlannerMode {
     match m {
         PlannerMode::DualStage => pb::PlannerMode::DualStage,
         PlannerMode::WithoutOpposition => pb::PlannerMode::WithoutOpposition,
+        PlannerMode::LearnedQuality => pb::PlannerMode::LearnedQuality,
     }
 }
 
@@ -140,6 +141,7 @@ pub fn mode_from_proto(v: i32, field: &str) -> Result<PlannerMode, FieldError> {
     match pb::PlannerMode::try_from(v) {
         Ok(pb::PlannerMode::DualStage) => Ok(PlannerMode::DualStage),
         Ok(pb::PlannerMode::WithoutOpposition) => Ok(PlannerMode::WithoutOpposition),
+        Ok(pb::PlannerMode::LearnedQuality) => Ok(PlannerMode::LearnedQuality),
         Err(_) => Err(FieldError::new(
             field,
             format!("unknown planner mode value {v}"),

@@ -7,16 +7,16 @@ use crate::error::ServiceError;
 use crate::limits::Limits;
 use crate::request::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
 use crate::schemas::{
-    CollisionReportDoc, GraspTypeDoc, HandDescriptionDoc, HandPartDoc, PlaneSourceDoc,
-    PlannerModeDoc, PlannerOptionsDoc, QualityDoc, StageStatsDoc, TimingsDoc, TypeSourceDoc,
-    Vec3InputDoc, Vec3ListDoc,
+    CollisionReportDoc, GraspTypeDoc, HandDescriptionDoc, HandPartDoc, LearnedQualityDoc,
+    PlaneSourceDoc, PlannerModeDoc, PlannerOptionsDoc, QualityDoc, StageStatsDoc, TimingsDoc,
+    TypeSourceDoc, Vec3InputDoc, Vec3ListDoc,
 };
 use base64::Engine;
 use graspd_core::cloud::{Plane, PointCloud, decode_packed_vec3};
 use graspd_core::perception::{CameraIntrinsics, RgbdFrame, WireImage, camera_pose};
 use graspd_core::planning::{
-    CollisionReport, Contact, GraspCandidate, PlaneSource, PlannerMode, Quality, StageStats,
-    Timings, TypeSource,
+    CollisionReport, Contact, GraspCandidate, LearnedQuality, PlaneSource, PlannerMode, Quality,
+    StageStats, Timings, TypeSource,
 };
 use graspd_core::{
     FieldError, GraspPlan, GraspType, HandDescription, HandPart, PlanHints, PlannerOptions,
@@ -603,6 +603,10 @@ pub struct PlanResponseJson {
     /// The candidates in the layout of `moveit_msgs/Grasp`, when `output.moveit_grasps` was set.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub moveit_grasps: Vec<MoveItGraspJson>,
+    /// What the learned-quality search found (`options.mode = "learned_quality"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(value_type = Option<LearnedQualityDoc>)]
+    pub learned_quality: Option<LearnedQuality>,
 }
 
 impl From<&GraspPlan> for PlanResponseJson {
@@ -656,6 +660,7 @@ impl From<&GraspPlan> for PlanResponseJson {
             warnings: p.warnings.clone(),
             perception: p.perception.as_ref().map(PerceptionJson::from),
             moveit_grasps: p.moveit_grasps.iter().map(MoveItGraspJson::from).collect(),
+            learned_quality: p.learned_quality.clone(),
         }
     }
 }

@@ -340,6 +340,7 @@ fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
             detected_attention: None,
             detected_types: None,
             seen_from: Vec::new(),
+            parallel_grasp: None,
         },
         image_hints: ImageHints {
             attention_pixel: args.pixel.map(|[u, v]| (pixel(u), pixel(v))),

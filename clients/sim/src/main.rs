@@ -59,6 +59,10 @@ struct Cli {
     /// graspd's detection.
     #[arg(long, global = true, value_parser = parse_grasp_type)]
     grasp_type: Option<graspd_proto::v1::GraspType>,
+    /// graspd's planner mode (dual_stage, without_opposition, learned_quality: ch. 3's learned
+    /// parallel-jaw quality, for a two-jaw gripper).
+    #[arg(long, global = true, value_parser = parse_mode)]
+    mode: Option<graspd_proto::v1::PlannerMode>,
     /// Half-width of the square on the table the object is placed in (any yaw), m.
     #[arg(long, default_value_t = graspd_sim::trial::PLACE_RANGE, global = true)]
     place_range: f64,
@@ -183,6 +187,31 @@ enum Command {
         /// The new run's results.json.
         new: PathBuf,
     },
+    /// Physics labels for the learned parallel-jaw quality (issue 18, ch. 3): sampled grasps
+    /// straight down, each realised by graspd-core in-process and executed; writes crop.npy,
+    /// configuration.npy, label.npy, meta.jsonl and summary.json to --out. Needs no graspd.
+    LabelGrasps {
+        /// The parallel gripper (built-in name or MJCF model).
+        #[arg(long, default_value = "robotiq_2f85")]
+        hand: String,
+        /// Comma-separated YCB objects the scenes alternate with generated primitives, or
+        /// `all`; default: all.
+        #[arg(long, default_value = "all")]
+        objects: String,
+        /// Scenes (one object each).
+        #[arg(long, default_value_t = 100)]
+        scenes: usize,
+        /// Grasps sampled and executed per scene.
+        #[arg(long, default_value_t = 8)]
+        per_scene: usize,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Worker threads (default: the number of cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+        #[arg(long, default_value = "sim-results/grasp-labels")]
+        out: PathBuf,
+    },
     /// How well graspd's completion of a single view guesses the unseen side, against the
     /// object seen from all around the table (markdown, per object). Needs no graspd.
     Completion {
@@ -274,6 +303,7 @@ fn real_main() -> Result<(), SimError> {
         views: cli.views,
         gravity_test: !cli.skip_gravity_test,
         grip_reflex: !cli.no_grip_reflex,
+        mode: cli.mode,
     };
     if let Command::Completion { runs } = &cli.command {
         let scores = graspd_sim::completion::run_completion(
@@ -284,6 +314,47 @@ fn real_main() -> Result<(), SimError> {
             &opts,
         )?;
         print!("{}", graspd_sim::completion::markdown(&scores));
+        return Ok(());
+    }
+    if let Command::LabelGrasps {
+        hand,
+        objects,
+        scenes,
+        per_scene,
+        seed,
+        jobs,
+        out,
+    } = &cli.command
+    {
+        use graspd_sim::object::{BEYOND_TABLE_5_2, TABLE_5_2, is_shared_ycb};
+        let objects = if objects == "all" {
+            [TABLE_5_2.as_slice(), &BEYOND_TABLE_5_2]
+                .concat()
+                .into_iter()
+                .filter(|o| is_shared_ycb(o))
+                .map(String::from)
+                .collect()
+        } else {
+            split_names(objects)
+        };
+        let config = graspd_sim::labels::LabelConfig {
+            hand: hand.clone(),
+            objects,
+            scenes: *scenes,
+            per_scene: *per_scene,
+            seed: *seed,
+            jobs: jobs
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+            out: out.clone(),
+            hands_dir: cli.testdata.join("hands"),
+            objects_dir: cli.testdata.join("objects"),
+            options: opts,
+        };
+        let summary = graspd_sim::labels::label_grasps(&config)?;
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&summary).unwrap_or_default()
+        );
         return Ok(());
     }
     let rt = tokio::runtime::Runtime::new()
@@ -405,7 +476,7 @@ fn real_main() -> Result<(), SimError> {
             let report = graspd_sim::clutter::run_clutter_bench(&config, &service)?;
             println!("{}", report.markdown);
         }
-        Command::Compare { .. } | Command::Completion { .. } => {
+        Command::Compare { .. } | Command::Completion { .. } | Command::LabelGrasps { .. } => {
             unreachable!("answered before graspd is connected")
         }
     }
@@ -413,6 +484,15 @@ fn real_main() -> Result<(), SimError> {
 }
 
 /// A grasp type by its name (`large_wrap` … `tripod`).
+fn parse_mode(name: &str) -> Result<graspd_proto::v1::PlannerMode, String> {
+    graspd_proto::v1::PlannerMode::from_str_name(&format!("PLANNER_MODE_{}", name.to_uppercase()))
+        .ok_or_else(|| {
+            format!(
+                "unknown planner mode '{name}' (dual_stage, without_opposition, learned_quality)"
+            )
+        })
+}
+
 fn parse_grasp_type(name: &str) -> Result<graspd_proto::v1::GraspType, String> {
     graspd_proto::v1::GraspType::from_str_name(&format!("GRASP_TYPE_{}", name.to_uppercase()))
         .filter(|t| *t != graspd_proto::v1::GraspType::Unspecified)

@@ -27,6 +27,8 @@ pub struct PlanAsk {
     /// `options.candidates` (0: graspd's default, one plan).
     pub candidates: u32,
     pub grasp_type: Option<pb::GraspType>,
+    /// `options.mode` (None: graspd's default).
+    pub mode: Option<pb::PlannerMode>,
     /// `hints.object`: the object graspd's recogniser takes for this name is the target.
     pub object: Option<String>,
 }
@@ -130,6 +132,7 @@ impl Service {
                 seed: Some(seed),
                 squeeze_depth: Some(hand.squeeze_depth),
                 candidates: (ask.candidates > 0).then_some(ask.candidates),
+                mode: ask.mode.map(|m| m as i32),
                 ..Default::default()
             }),
             extra_views: extra_views.iter().map(frame_to_proto).collect(),

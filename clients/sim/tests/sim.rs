@@ -520,6 +520,7 @@ fn trial_options() -> TrialOptions {
         views: 1,
         gravity_test: false,
         grip_reflex: true,
+        mode: None,
     }
 }
 

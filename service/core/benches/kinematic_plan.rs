@@ -86,6 +86,7 @@ fn main() {
                         ..Default::default()
                     },
                     kinematics,
+                    grasp_quality: None,
                 };
                 let p = plan(input(None)).unwrap();
                 base.push(p.timings.total * 1e3);

@@ -205,6 +205,7 @@ fn bench_perception(c: &mut Criterion) {
                         },
                         options: PlannerOptions::default(),
                         kinematics: None,
+                        grasp_quality: None,
                     })
                     .unwrap(),
                 )

@@ -38,6 +38,7 @@ fn bench_plan(c: &mut Criterion) {
                         ..Default::default()
                     },
                     kinematics: None,
+                    grasp_quality: None,
                 };
                 let id =
                     BenchmarkId::new(format!("{hand}/{label}_opposition"), object.short_name());

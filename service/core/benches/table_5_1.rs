@@ -78,6 +78,7 @@ fn input(
         },
         options,
         kinematics: None,
+        grasp_quality: None,
     }
 }
 

@@ -29,6 +29,9 @@ pub enum PlanError {
     /// The request names something that is not there (an object not in view).
     #[error(transparent)]
     NotFound(FieldError),
+    /// A model graspd runs failed on a valid request (an inference error).
+    #[error("{0}")]
+    Model(String),
     /// The input is valid but this capability is not implemented yet.
     #[error("{0}")]
     Unimplemented(String),

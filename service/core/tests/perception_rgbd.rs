@@ -467,6 +467,7 @@ fn grasp_information_then_a_plan_for_each_table_5_2_object() {
                 },
                 options: graspd_core::PlannerOptions::default(),
                 kinematics: None,
+                grasp_quality: None,
             })
             .unwrap();
             // Seen contacts on the mesh; those on the mirror-completed side near it (the YCB

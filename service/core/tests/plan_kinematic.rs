@@ -44,6 +44,7 @@ fn plan_with(
         },
         options: PlannerOptions { seed, ..options },
         kinematics: Some(model.clone()),
+        grasp_quality: None,
     })
     .unwrap()
 }
@@ -390,6 +391,7 @@ fn a_given_parallel_grasp_is_realised_straight_down() {
                 ..Default::default()
             },
             kinematics: kinematic.then(|| m.clone()),
+            grasp_quality: None,
         })
     };
     for axis in [Vector3::x(), Vector3::y()] {
@@ -514,6 +516,7 @@ fn fingertip_grasps_of_wide_boxes_touch_with_thumb_and_fingers() {
                 ..Default::default()
             },
             kinematics: Some(m.clone()),
+            grasp_quality: None,
         })
         .unwrap();
         if p.feasible {

@@ -23,6 +23,7 @@ fn run(points: Vec<Point3<f64>>, hand: &str, seed: u64, plane: bool, forced: Opt
             ..Default::default()
         },
         kinematics: None,
+        grasp_quality: None,
     };
     match plan(input) {
         Ok(p) => {

@@ -67,6 +67,7 @@ fn each_shared_hands_plan_loads_as_gltf_with_its_links_where_the_plan_puts_them(
                 ..Default::default()
             },
             kinematics: Some(model.clone()),
+            grasp_quality: None,
         })
         .unwrap();
         let glb = to_glb(&plan_scene(&cloud.points, &p, Some(&model)));

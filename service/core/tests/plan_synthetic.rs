@@ -60,6 +60,7 @@ fn input(points: Vec<Point3<f64>>, hand: &str, view: Point3<f64>, seed: u64) -> 
             ..Default::default()
         },
         kinematics: None,
+        grasp_quality: None,
     }
 }
 

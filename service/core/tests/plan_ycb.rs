@@ -25,6 +25,7 @@ fn plan_view(object: Object, hand: &str, seed: u64) -> (GraspPlan, PointCloud) {
             ..Default::default()
         },
         kinematics: None,
+        grasp_quality: None,
     })
     .unwrap();
     (p, cloud)

@@ -103,6 +103,13 @@ pub struct Cli {
     /// stops the start.
     #[arg(long, env = "GRASPD_RECOGNISER_MODEL", value_name = "FILE")]
     pub recogniser_model: Option<PathBuf>,
+    /// The learned parallel-jaw grasp quality of `options.mode = learned_quality` (ONNX,
+    /// models/grasp_quality/MODEL_CARD.md) [default: the copy of
+    /// models/grasp_quality/grasp_quality.onnx built into graspd; if it cannot be loaded (no ONNX
+    /// Runtime) graspd warns and refuses that mode]. `none`: no model. A given file that does
+    /// not load or breaks the contract stops the start.
+    #[arg(long, env = "GRASPD_GRASP_QUALITY_MODEL", value_name = "FILE")]
+    pub grasp_quality_model: Option<PathBuf>,
     /// libonnxruntime.so (1.31) to load the model with [default: $ORT_DYLIB_PATH].
     #[arg(long, env = "GRASPD_ONNXRUNTIME", value_name = "FILE")]
     pub onnxruntime: Option<PathBuf>,
@@ -176,6 +183,7 @@ pub struct FileConfig {
     pub grasp_type_model: Option<PathBuf>,
     pub tactile_model: Option<PathBuf>,
     pub recogniser_model: Option<PathBuf>,
+    pub grasp_quality_model: Option<PathBuf>,
     pub onnxruntime: Option<PathBuf>,
     pub model_threads: Option<usize>,
     pub log: Option<String>,
@@ -220,6 +228,9 @@ pub struct Settings {
     /// `None`: the built-in copy; `Some("none")`: no model.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub recogniser_model: Option<PathBuf>,
+    /// `None`: the built-in copy; `Some("none")`: no model.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grasp_quality_model: Option<PathBuf>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub onnxruntime: Option<PathBuf>,
     pub model_threads: usize,
@@ -342,6 +353,7 @@ impl Settings {
             grasp_type_model: cli.grasp_type_model.clone().or(file.grasp_type_model),
             tactile_model: cli.tactile_model.clone().or(file.tactile_model),
             recogniser_model: cli.recogniser_model.clone().or(file.recogniser_model),
+            grasp_quality_model: cli.grasp_quality_model.clone().or(file.grasp_quality_model),
             onnxruntime: cli.onnxruntime.clone().or(file.onnxruntime),
             model_threads: cli.model_threads.or(file.model_threads).unwrap_or(1),
             log: cli

@@ -9,6 +9,7 @@ use crate::tls::{Listening, Tls, TlsError};
 use crate::{grpc, rest};
 use graspd_core::onnx_runtime::init_onnx_runtime;
 use graspd_core::perception::{GraspTypeModel, RecognitionModel};
+use graspd_core::planning::grasp_quality::GraspQualityModel;
 use graspd_core::tactile::{TactileModel, TactileModelError};
 use std::future::Future;
 use std::io::Write;
@@ -67,6 +68,10 @@ const EMBEDDED_TACTILE_NAME: &str = "built-in models/tactile/tactile_detector.on
 const EMBEDDED_RECOGNISER_MODEL: &[u8] =
     include_bytes!("../../../models/recogniser/recogniser.onnx");
 const EMBEDDED_RECOGNISER_NAME: &str = "built-in models/recogniser/recogniser.onnx";
+/// models/grasp_quality/grasp_quality.onnx (about 0.5 MB).
+const EMBEDDED_GRASP_QUALITY_MODEL: &[u8] =
+    include_bytes!("../../../models/grasp_quality/grasp_quality.onnx");
+const EMBEDDED_GRASP_QUALITY_NAME: &str = "built-in models/grasp_quality/grasp_quality.onnx";
 
 /// Loads a model the same way for both: a configured file must load (else the start fails);
 /// with none configured the built-in copy is loaded (`load(None)`), and if that fails (e.g. no
@@ -146,6 +151,28 @@ fn with_models(service: GraspService, settings: &Settings) -> Result<GraspServic
             "recogniser loaded"
         );
         service = service.with_recogniser(Arc::new(model));
+    }
+    if let Some(model) = load_model(
+        "grasp-quality model",
+        settings.grasp_quality_model.as_deref(),
+        "options.mode = learned_quality is refused",
+        |path| {
+            init_onnx_runtime(runtime)?;
+            match path {
+                Some(p) => GraspQualityModel::load(p, settings.model_threads),
+                None => GraspQualityModel::from_bytes(
+                    EMBEDDED_GRASP_QUALITY_MODEL,
+                    EMBEDDED_GRASP_QUALITY_NAME,
+                    settings.model_threads,
+                ),
+            }
+        },
+    )? {
+        tracing::info!(
+            source = %model.path().display(),
+            "grasp-quality model loaded"
+        );
+        service = service.with_grasp_quality(Arc::new(model));
     }
     if let Some(model) = load_model(
         "tactile model",

@@ -87,6 +87,8 @@ pub struct TrialOptions {
     pub candidate: usize,
     /// Force this grasp type instead of graspd's detection.
     pub grasp_type: Option<graspd_proto::v1::GraspType>,
+    /// graspd's planner mode (None: its default).
+    pub mode: Option<graspd_proto::v1::PlannerMode>,
     /// Half-width of the square the object is placed in, m.
     pub place_range: f64,
     /// Views of the scene sent with each PlanGrasp (RGB-D input): the camera, and `views − 1`
@@ -151,6 +153,7 @@ pub fn run_trial(
             0
         },
         grasp_type: opts.grasp_type,
+        mode: opts.mode,
         object: None,
     };
     let robustness = |r: &PlanResult| r.response.quality.as_ref().map_or(0.0, |q| q.robustness);
@@ -432,7 +435,7 @@ pub fn pre_grasp_and_approach(
 }
 
 /// Steps 3–7 of the protocol on a plan.
-fn execute(
+pub(crate) fn execute(
     trial: &mut Trial,
     plan: &PlanResult,
     start: Point3<f64>,

@@ -252,4 +252,21 @@ pub struct GraspPlan {
     /// The plan as a binary glTF scene, when asked for (`crate::plan_scene`).
     #[serde(skip)]
     pub scene_glb: Option<Vec<u8>>,
+    /// What the learned-quality search found (`options.mode = learned_quality`, ch. 3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub learned_quality: Option<LearnedQuality>,
+}
+
+/// The learned-quality search's result (dissertation §3.2.3): the network's P(success) of the
+/// executed grasp, the Gaussian process's posterior there, and what the search cost.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LearnedQuality {
+    /// P(y = 1 | I, g) of Eq 3.1 for the grasp the plan executes.
+    pub probability: f64,
+    /// The surrogate's posterior at that grasp (Eq 3.5): mean and standard deviation.
+    pub posterior_mean: f64,
+    pub posterior_std: f64,
+    /// Network evaluations the search made, and the candidates it could choose among.
+    pub network_calls: usize,
+    pub candidates: usize,
 }

@@ -12,6 +12,7 @@ pub mod grasp_quality;
 pub mod grip_forces;
 pub mod hand_pose;
 pub mod kinematic_model;
+mod learned_planner;
 pub mod moveit_grasp;
 pub mod moveit_layout;
 pub mod object_shape;

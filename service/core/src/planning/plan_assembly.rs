@@ -145,6 +145,7 @@ pub(super) fn assemble(
         perception: None,
         moveit_grasps: Vec::new(),
         scene_glb: None,
+        learned_quality: None,
     })
 }
 
@@ -381,6 +382,7 @@ fn plan_of_final(
         perception: None,
         moveit_grasps: Vec::new(),
         scene_glb: None,
+        learned_quality: None,
     })
 }
 

@@ -5,7 +5,9 @@ use super::dual_stage;
 use super::evaluation::SearchContext;
 use super::final_configuration;
 use super::grasp_plan::*;
+use super::grasp_quality::GraspQualityModel;
 use super::kinematic_model::KinematicModel;
+use super::learned_planner;
 use super::object_shape::ObjectShape;
 use super::plan_assembly::{assemble, final_plan};
 use super::request::*;
@@ -32,6 +34,8 @@ pub struct PlanInput {
     /// The hand's kinematics, when known (a hand imported from MJCF or URDF): the final contacts
     /// then become joints, and IK reachability is a hard constraint.
     pub kinematics: Option<Arc<KinematicModel>>,
+    /// The learned parallel-jaw quality network (`options.mode = learned_quality`, ch. 3).
+    pub grasp_quality: Option<Arc<GraspQualityModel>>,
 }
 
 /// A caller's attention point must lie this close to the cloud, m.
@@ -146,6 +150,7 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         hints,
         options,
         kinematics,
+        grasp_quality,
     } = input;
     options.validate()?;
     hand.validate()?;
@@ -284,12 +289,19 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
         approach_prefs: approach_prefs(&grasp),
     };
     let no_contacts = || FieldError::new("cloud", "no candidate contacts near the attention point");
-    if hints.parallel_grasp.is_some() && kinematics.is_none() {
+    let given = if hints.parallel_grasp.is_some() {
+        Some("hints.parallel_grasp")
+    } else {
+        (options.mode == PlannerMode::LearnedQuality).then_some("options.mode")
+    };
+    if let Some(field) = given
+        && kinematics.is_none()
+    {
         return Err(FieldError::new(
-            "hints.parallel_grasp",
+            field,
             format!(
-                "hand '{}' has no kinematic model: a given grasp is realised with the hand's \
-                 joints",
+                "hand '{}' has no kinematic model: a grasp straight down is realised with the \
+                 hand's joints",
                 hand.name
             ),
         )
@@ -315,68 +327,29 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
                 .collect::<Result<_, PlanError>>()?;
             (plan, t, grasp.clone())
         }
-        Some(model) if hints.parallel_grasp.is_some() => {
-            let field = "hints.parallel_grasp";
-            let up = up.ok_or_else(|| {
-                FieldError::new(
-                    field,
-                    "needs a support plane or hints.up: the gripper comes straight down",
-                )
-            })?;
-            let g = hints
-                .parallel_grasp
-                .as_ref()
-                .map(|g| g.checked(&up, field))
-                .transpose()?
-                .expect("checked above");
-            let pinch = hand
-                .resolve_forced(GraspType::Pinch)
-                .filter(|p| p.h1_fingers.len() == 1 && p.h2_fingers.len() == 1)
-                .ok_or_else(|| {
-                    FieldError::new(
-                        field,
-                        format!(
-                            "hand '{}' has no pinch between two single jaws: a parallel grasp \
-                             is a two-jaw gripper's",
-                            hand.name
-                        ),
-                    )
-                })?;
-            let opposition = g
-                .opposition(points, &index, hand.geometry.max_aperture / 2.0)
-                .ok_or_else(|| {
-                    FieldError::new(
-                        field,
-                        format!(
-                            "the jaws' line meets no object section within the hand's \
-                             opening ({:.0} mm) about the centre",
-                            hand.geometry.max_aperture * 1e3
-                        ),
-                    )
-                })?;
-            let ctx = base.for_grasp(&pinch, vec![-up]);
-            let t = Instant::now();
-            let finals: Vec<_> = final_configuration::realise(&ctx, model, opposition, &-up)?
-                .into_iter()
-                .collect();
-            let s2 = StageStats {
-                solution_space: finals.len() as f64,
-                candidates: finals.len(),
-                iterations: finals.len(),
-                evaluations: finals.len(),
-                feasible_found: finals.iter().any(|f| f.feasible),
-                seconds: t.elapsed().as_secs_f64(),
-                ..Default::default()
-            };
-            let plan = final_plan(
-                &ctx,
-                &finals,
-                &scene,
+        Some(model)
+            if hints.parallel_grasp.is_some() || options.mode == PlannerMode::LearnedQuality =>
+        {
+            let r = learned_planner::Request {
+                base: &base,
+                scene: &scene,
+                index: &index,
                 model,
-                (StageStats::default(), s2, true, None),
-                &[opposition],
-            )?;
-            (plan, t, pinch)
+                hand: &hand,
+                up,
+            };
+            match (&hints.parallel_grasp, &grasp_quality) {
+                (Some(g), _) => learned_planner::given_grasp(&r, g)?,
+                (None, Some(network)) => learned_planner::learned_quality(&r, network)?,
+                (None, None) => {
+                    return Err(FieldError::new(
+                        "options.mode",
+                        "learned_quality needs the grasp-quality network, and graspd runs \
+                         without one (--grasp-quality-model none)",
+                    )
+                    .into());
+                }
+            }
         }
         Some(model) => {
             // The detected type first, then (unless the caller forced one) the other types the

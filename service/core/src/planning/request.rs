@@ -7,7 +7,8 @@ use crate::planning::parallel_grasp::ParallelGrasp;
 use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
-/// Dual-stage (the method) or the "without opposition" ablation of Table 5.1.
+/// Dual-stage (the method), the "without opposition" ablation of Table 5.1, or ch. 3's
+/// learned quality for a two-jaw gripper.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PlannerMode {
@@ -15,6 +16,9 @@ pub enum PlannerMode {
     DualStage,
     /// Skip stage 1 and search the m contacts directly over the whole cloud.
     WithoutOpposition,
+    /// A learned quality network searched by Bayesian optimisation over grasps straight down
+    /// (`learned_planner`).
+    LearnedQuality,
 }
 
 impl PlannerMode {
@@ -23,6 +27,7 @@ impl PlannerMode {
         match self {
             PlannerMode::DualStage => "dual_stage",
             PlannerMode::WithoutOpposition => "without_opposition",
+            PlannerMode::LearnedQuality => "learned_quality",
         }
     }
 }

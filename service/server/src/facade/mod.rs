@@ -13,6 +13,7 @@ use crate::hand_store;
 use graspd_core::HandCatalog;
 use graspd_core::perception::{GraspTypeModel, RecognitionModel};
 use graspd_core::planning::KinematicModel;
+use graspd_core::planning::grasp_quality::GraspQualityModel;
 use graspd_core::tactile::{SensorCatalog, TactileModel};
 use std::collections::{BTreeMap, BTreeSet};
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -56,6 +57,9 @@ struct Inner {
     tactile_model: Option<Arc<TactileModel>>,
     /// The recogniser of `hints.object` (§3.2.1), when loaded.
     recogniser: Option<Arc<RecognitionModel>>,
+    /// The learned parallel-jaw quality of `options.mode = learned_quality` (§3.2.2), when
+    /// loaded.
+    grasp_quality: Option<Arc<GraspQualityModel>>,
     /// Tactile calibrations by name (issue 16).
     calibrations: RwLock<calibrations::Calibrations>,
 }
@@ -85,6 +89,7 @@ impl GraspService {
                 grasp_type_model: None,
                 tactile_model: None,
                 recogniser: None,
+                grasp_quality: None,
                 calibrations: RwLock::default(),
             }),
         }
@@ -104,6 +109,15 @@ impl GraspService {
         Arc::get_mut(&mut self.inner)
             .expect("the model is set at start, before the service is shared")
             .recogniser = Some(model);
+        self
+    }
+
+    /// Sets the grasp-quality network of `options.mode = learned_quality` (at start, before the
+    /// service is cloned).
+    pub fn with_grasp_quality(mut self, model: Arc<GraspQualityModel>) -> Self {
+        Arc::get_mut(&mut self.inner)
+            .expect("the model is set at start, before the service is shared")
+            .grasp_quality = Some(model);
         self
     }
 

@@ -196,6 +196,7 @@ impl GraspService {
                 hints,
                 options: request.options,
                 kinematics,
+                grasp_quality: self.inner.grasp_quality.clone(),
             },
             perceived,
         ))

@@ -7,8 +7,8 @@
 //! called on pool members only. The search fits the Gaussian process ([`gaussian_process`]) to
 //! the grasps queried so far, queries the unqueried member with the largest upper confidence
 //! bound (Eq 3.6), and stops when no member's bound exceeds the best quality found (none can do
-//! better, as far as the surrogate knows), when `patience` queries in a row found nothing
-//! better, or after `max_calls`.
+//! better, as far as the surrogate knows; not before [`MIN_QUERIES`] queries beyond the initial
+//! set), when `patience` queries in a row found nothing better, or after `max_calls`.
 //!
 //! Eq 3.6 as printed weighs the variance, μ + β σ²; here the bound is the usual GP-UCB one,
 //! μ + β σ, with β ∈ [2.5, 3] as §3.4 measured. Qualities are probabilities whose spread over a
@@ -71,6 +71,8 @@ pub struct SearchResult {
 const LENGTHS: [f64; 4] = [0.25, 0.5, 1.0, 2.0];
 /// Noise variances tried, as fractions of the function variance.
 const NOISE_FRACTIONS: [f64; 2] = [1e-3, 3e-2];
+/// Queries after the initial set before the bound may end the search.
+const MIN_QUERIES: usize = 10;
 /// Least function variance (qualities all alike early on would otherwise give a flat prior).
 const MIN_SIGNAL_VARIANCE: f64 = 1e-3;
 
@@ -114,7 +116,9 @@ pub fn bayesian_search<E>(
             })
             .max_by(|a, b| a.1.total_cmp(&b.1));
         let Some((next, bound)) = next else { break };
-        if bound <= values[best] {
+        // Nothing can beat the best, as far as the surrogate knows — once it has seen
+        // MIN_QUERIES beyond the initial set (fitted to that set alone it is often too sure).
+        if bound <= values[best] && queried.len() >= first.len() + MIN_QUERIES {
             break;
         }
         let q = quality(&[next])?[0];

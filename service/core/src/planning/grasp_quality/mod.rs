@@ -5,3 +5,6 @@
 
 pub mod candidates;
 pub mod crop;
+pub mod model;
+
+pub use model::GraspQualityModel;
