@@ -91,7 +91,10 @@ fn the_gripper_plans_down_with_the_learned_quality() {
         // contacts' heights within the jaws' 6 mm tube).
         let a = p.approach.unwrap();
         assert!(a.z < -0.98, "{object:?}: approach {a:?}");
-        assert!(!p.joints.is_empty() && !p.squeeze_joints.is_empty(), "{object:?}");
+        assert!(
+            !p.joints.is_empty() && !p.squeeze_joints.is_empty(),
+            "{object:?}"
+        );
         feasible += usize::from(p.feasible);
     }
     // Whether they hold is graspd-sim's to say (docs/sim-benchmark.md, "Learned quality"); here

@@ -189,15 +189,7 @@ fn realise(
     let finals: Vec<_> = final_configuration::realise(&ctx, r.model, oppositions[0], &-up)?
         .into_iter()
         .collect();
-    let s2 = StageStats {
-        solution_space: finals.len() as f64,
-        candidates: finals.len(),
-        iterations: finals.len(),
-        evaluations: finals.len(),
-        feasible_found: finals.iter().any(|f| f.feasible),
-        seconds: t.elapsed().as_secs_f64(),
-        ..Default::default()
-    };
+    let s2 = final_configuration::stage_stats(&finals, t.elapsed().as_secs_f64());
     final_plan(
         &ctx,
         &finals,

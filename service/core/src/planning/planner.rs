@@ -376,15 +376,7 @@ pub fn plan(input: PlanInput) -> Result<GraspPlan, PlanError> {
                 let t = Instant::now();
                 let finals =
                     final_configuration::search(&ctx, model, &oppositions, options.candidates)?;
-                let s2 = StageStats {
-                    solution_space: finals.len() as f64,
-                    candidates: finals.len(),
-                    iterations: finals.len(),
-                    evaluations: finals.len(),
-                    feasible_found: finals.iter().any(|f| f.feasible),
-                    seconds: t.elapsed().as_secs_f64(),
-                    ..Default::default()
-                };
+                let s2 = final_configuration::stage_stats(&finals, t.elapsed().as_secs_f64());
                 let attempt = TypeAttempt {
                     grasp: g,
                     oppositions,

@@ -186,6 +186,29 @@ pub(crate) fn read_model_file(path: &Path) -> Result<Vec<u8>, ModelError> {
     std::fs::read(path).map_err(|e| load_err(e.to_string()))
 }
 
+/// A session of the model held in `bytes` (`name` stands for its path in messages) that
+/// `check` finds under its contract, with what `check` returns.
+pub(crate) fn checked_session<T>(
+    bytes: &[u8],
+    name: &str,
+    intra_threads: usize,
+    check: impl FnOnce(&Session) -> Result<T, String>,
+) -> Result<(PathBuf, Session, T), ModelError> {
+    let path = PathBuf::from(name);
+    let session = session_from_memory(bytes, intra_threads).map_err(|e| match e {
+        SessionError::Runtime(e) => ModelError::Runtime(e),
+        SessionError::Load(reason) => ModelError::Load {
+            path: path.clone(),
+            reason,
+        },
+    })?;
+    let checked = check(&session).map_err(|reason| ModelError::Contract {
+        path: path.clone(),
+        reason,
+    })?;
+    Ok((path, session, checked))
+}
+
 /// The frame as the network sees it before colour normalisation: planes R, G, B (0…255) and,
 /// with `depth`, metres (0 where invalid), resized to `w` × `h` by bilinear interpolation
 /// where the size differs (model contract). Public so that training data is made by exactly

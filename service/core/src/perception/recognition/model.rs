@@ -4,10 +4,8 @@
 //! `graspd.classes` names (comma-separated, one of them `unknown`); graspd applies the softmax.
 
 use super::crop::{CROP_CHANNELS, CROP_SIDE, ObjectCrop, SIZE_FEATURES};
-use crate::onnx_runtime::{
-    SessionError, check_float_inputs, fmt_dims, session_from_memory, softmax, tensor_info,
-};
-use crate::perception::grasp_type::{ModelError, read_model_file};
+use crate::onnx_runtime::{check_float_inputs, fmt_dims, softmax, tensor_info};
+use crate::perception::grasp_type::{ModelError, checked_session, read_model_file};
 use ort::session::Session;
 use ort::value::{TensorElementType, TensorRef};
 use std::path::{Path, PathBuf};
@@ -36,18 +34,7 @@ impl RecognitionModel {
     /// Loads a model held in memory (the copy of models/recogniser/recogniser.onnx built into
     /// graspd); `name` stands for its path in messages.
     pub fn from_bytes(bytes: &[u8], name: &str, intra_threads: usize) -> Result<Self, ModelError> {
-        let path = PathBuf::from(name);
-        let session = session_from_memory(bytes, intra_threads).map_err(|e| match e {
-            SessionError::Runtime(e) => ModelError::Runtime(e),
-            SessionError::Load(reason) => ModelError::Load {
-                path: path.clone(),
-                reason,
-            },
-        })?;
-        let classes = check_contract(&session).map_err(|reason| ModelError::Contract {
-            path: path.clone(),
-            reason,
-        })?;
+        let (path, session, classes) = checked_session(bytes, name, intra_threads, check_contract)?;
         Ok(Self {
             path,
             session: Mutex::new(session),

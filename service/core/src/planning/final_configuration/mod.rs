@@ -50,6 +50,7 @@ mod pregrasp;
 mod squeeze;
 
 use super::evaluation::SearchContext;
+use super::grasp_plan::StageStats;
 use super::kinematic_model::KinematicModel;
 use super::quality::ContactPoint;
 use super::robustness::Robustness;
@@ -377,6 +378,19 @@ pub fn search(
         }
     }
     Ok(out)
+}
+
+/// The statistics of a final-configuration search that returned `finals` in `seconds`.
+pub fn stage_stats(finals: &[FinalConfiguration], seconds: f64) -> StageStats {
+    StageStats {
+        solution_space: finals.len() as f64,
+        candidates: finals.len(),
+        iterations: finals.len(),
+        evaluations: finals.len(),
+        feasible_found: finals.iter().any(|f| f.feasible),
+        seconds,
+        ..Default::default()
+    }
 }
 
 /// The scores a candidate's robustness must lift it above to matter (`FinalConfiguration::rated`).
