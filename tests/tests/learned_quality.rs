@@ -3,7 +3,8 @@
 //! grasp-quality network — straight down, the network's P(success), the Gaussian process's
 //! posterior and the calls the Bayesian search made in the response — the same over gRPC and
 //! REST; a hand without a two-jaw pinch, and a server without the network, are refused naming
-//! `options.mode`, and the next request still works.
+//! `options.mode`, and the next request still works. A grasp the caller gives
+//! (`hints.parallel_grasp`) is realised as given.
 
 use graspd::grpc::status::FIELD_METADATA_KEY;
 use graspd_e2e::{Server, http, packed, rest_error};
@@ -146,4 +147,68 @@ async fn without_the_network_the_mode_is_refused() {
         "options.mode"
     );
     assert!(status.message().contains("network"), "{}", status.message());
+}
+
+/// `hints.parallel_grasp`: the caller's grasp g straight down, realised with the gripper's
+/// kinematics over gRPC — the jaws meet the can on each side of the given centre; over REST a
+/// vertical jaw line is refused naming `hints.parallel_grasp.axis`.
+#[tokio::test]
+async fn a_given_parallel_grasp_is_realised_over_grpc_and_refused_when_vertical_over_rest() {
+    let flags = import_gripper();
+    let flags: Vec<&str> = flags.iter().map(String::as_str).collect();
+    let server = Server::start_with(&flags);
+    let view = standard_view(Object::TomatoSoupCan, 2000, 2);
+    let top = view
+        .object_cloud()
+        .points
+        .iter()
+        .map(|p| p.z)
+        .fold(f64::MIN, f64::max);
+    let c = view.object_center;
+    let mut req = request("robotiq_2f85");
+    req.options = Some(pb::PlannerOptions {
+        seed: Some(3),
+        ..Default::default()
+    });
+    if let Some(h) = req.hints.as_mut() {
+        h.parallel_grasp = Some(pb::ParallelGrasp {
+            centre: Some(v3(c.x, c.y, top - 0.02)),
+            axis: Some(v3(1.0, 0.0, 0.0)),
+        });
+    }
+    let plan = server
+        .grpc()
+        .await
+        .plan_grasp(req)
+        .await
+        .unwrap()
+        .into_inner();
+    assert!(plan.learned_quality.is_none());
+    assert!(plan.approach.unwrap().z < -0.98);
+    let xs: Vec<f64> = plan
+        .contacts
+        .iter()
+        .filter(|k| k.finger != "palm")
+        .map(|k| k.position.as_ref().unwrap().x - c.x)
+        .collect();
+    assert!(
+        xs.iter().any(|&x| x < -0.02) && xs.iter().any(|&x| x > 0.02),
+        "jaw contacts along x about the centre: {xs:?}"
+    );
+    let mut body = rest_body("robotiq_2f85");
+    body["options"] = serde_json::json!({"seed": 3});
+    body["hints"]["parallel_grasp"] =
+        serde_json::json!({"centre": [c.x, c.y, top - 0.02], "axis": [0.0, 0.0, 1.0]});
+    let response = http()
+        .post(server.rest_url("/v1/plan"))
+        .json(&body)
+        .send()
+        .await
+        .unwrap();
+    let (code, _, field, message) = rest_error(response).await;
+    assert_eq!(
+        (code, field.as_deref()),
+        (400, Some("hints.parallel_grasp.axis")),
+        "{message}"
+    );
 }

@@ -10,6 +10,7 @@ use crate::limits::Limits;
 use crate::request::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
 use graspd_core::cloud::{PointCloud, decode_packed_vec3, decode_packed_xyz, encode_packed_xyz};
 use graspd_core::perception::{CameraIntrinsics, RgbdFrame, WireImage, camera_pose};
+use graspd_core::planning::parallel_grasp::ParallelGrasp;
 use graspd_core::planning::{
     CollisionReport, Contact, GraspCandidate, LearnedQuality, Opposition, Pose, Quality,
     StageStats, Timings,
@@ -17,7 +18,7 @@ use graspd_core::planning::{
 use graspd_core::{FieldError, GraspPlan, PlanHints, PlannerOptions};
 use graspd_proto::v1 as pb;
 use graspd_proto::v1::plan_grasp_request::{Hand, Input};
-use nalgebra::{Point3, Quaternion};
+use nalgebra::{Point3, Quaternion, Vector3};
 
 fn count(v: Option<u32>, default: usize) -> usize {
     v.map_or(default, |v| v as usize)
@@ -128,9 +129,10 @@ fn hints_from_proto(h: Option<pb::PlanHints>) -> Result<(PlanHints, ImageHints),
         detected_attention: None,
         detected_types: None,
         seen_from: Vec::new(),
-        // Realising a given parallel grasp is not offered over the API yet (ch. 3's
-        // learned-quality search and its label generator use it in-process).
-        parallel_grasp: None,
+        parallel_grasp: h.parallel_grasp.as_ref().map(|g| ParallelGrasp {
+            centre: g.centre.as_ref().map_or(Point3::origin(), point_from_proto),
+            axis: g.axis.as_ref().map_or(Vector3::zeros(), vec3_from_proto),
+        }),
     };
     let image = ImageHints {
         attention_pixel: h.attention_pixel.map(|p| (p.u, p.v)),
@@ -237,6 +239,10 @@ fn hints_to_proto(h: &PlanHints, image: &ImageHints) -> pb::PlanHints {
             }),
         object: image.object.clone(),
         most_salient: image.most_salient,
+        parallel_grasp: h.parallel_grasp.as_ref().map(|g| pb::ParallelGrasp {
+            centre: Some(point_to_proto(&g.centre)),
+            axis: Some(vec3_to_proto(&g.axis)),
+        }),
     }
 }
 

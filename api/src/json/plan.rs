@@ -14,6 +14,7 @@ use crate::schemas::{
 use base64::Engine;
 use graspd_core::cloud::{Plane, PointCloud, decode_packed_vec3};
 use graspd_core::perception::{CameraIntrinsics, RgbdFrame, WireImage, camera_pose};
+use graspd_core::planning::parallel_grasp::ParallelGrasp;
 use graspd_core::planning::{
     CollisionReport, Contact, GraspCandidate, LearnedQuality, PlaneSource, PlannerMode, Quality,
     StageStats, Timings, TypeSource,
@@ -101,6 +102,20 @@ pub struct HintsJson {
     pub object: String,
     #[serde(default)]
     pub most_salient: bool,
+    /// Realise this two-jaw grasp straight down instead of searching (ch. 3, g = {x, y, z, θ}).
+    #[serde(default)]
+    pub parallel_grasp: Option<ParallelGraspJson>,
+}
+
+/// A parallel-jaw grasp straight down: the jaws' centre and the direction they close along
+/// (made horizontal).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ParallelGraspJson {
+    #[schema(value_type = Vec3InputDoc)]
+    pub centre: Vec3Json,
+    #[schema(value_type = Vec3InputDoc)]
+    pub axis: Vec3Json,
 }
 
 /// `POST /v1/plan`: the PlanGraspRequest in JSON. In a multipart upload the `request` part has
@@ -391,9 +406,10 @@ pub fn plan_request_from_json(
         detected_attention: None,
         detected_types: None,
         seen_from: Vec::new(),
-        // Realising a given parallel grasp is not offered over the API yet (ch. 3's
-        // learned-quality search and its label generator use it in-process).
-        parallel_grasp: None,
+        parallel_grasp: h.parallel_grasp.map(|g| ParallelGrasp {
+            centre: g.centre.point(),
+            axis: g.axis.vector(),
+        }),
     };
     let image_hints = ImageHints {
         attention_pixel: h.attention_pixel.map(|p| (p.u, p.v)),
