@@ -262,9 +262,9 @@ fn configuration_of(g: &ParallelGrasp) -> [f64; 4] {
 fn write_samples(dir: &std::path::Path, records: &[LabelRecord]) -> Result<(), SimError> {
     let io = |e: std::io::Error| SimError::Input(format!("--out {}: {e}", dir.display()));
     let n = records.len();
-    let mut crop = graspd_model_data::npy_header("<f4", &[n, CHANNELS, CROP, CROP]);
-    let mut configuration = graspd_model_data::npy_header("<f4", &[n, 1]);
-    let mut label = graspd_model_data::npy_header("|u1", &[n]);
+    let mut crop = graspd_testkit::npy::npy_header("<f4", &[n, CHANNELS, CROP, CROP]);
+    let mut configuration = graspd_testkit::npy::npy_header("<f4", &[n, 1]);
+    let mut label = graspd_testkit::npy::npy_header("|u1", &[n]);
     let mut meta = Vec::new();
     for r in records {
         crop.extend(r.crop.iter().flat_map(|v| v.to_le_bytes()));

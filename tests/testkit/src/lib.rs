@@ -16,6 +16,7 @@
 //! assert_eq!(v.cloud.len(), 2000);
 //! ```
 
+pub mod npy;
 pub mod render;
 pub mod rgbd;
 pub mod sample;

@@ -263,7 +263,9 @@ pub struct GraspPlan {
 pub struct LearnedQuality {
     /// P(y = 1 | I, g) of Eq 3.1 for the grasp the plan executes.
     pub probability: f64,
-    /// The surrogate's posterior at that grasp (Eq 3.5): mean and standard deviation.
+    /// The surrogate's posterior (Eq 3.5), mean and standard deviation, at the grasp the search
+    /// rated best — the executed one unless graspd found that one infeasible and realised a
+    /// lower-rated one.
     pub posterior_mean: f64,
     pub posterior_std: f64,
     /// Network evaluations the search made, and the candidates it could choose among.
