@@ -1,8 +1,8 @@
 //! The planner with the shared hands' kinematics (issue 6, issue 15): plans on the dissertation's
 //! YCB views come back executable — joints, pre-grasp and squeeze inside the limits, the model
 //! mounted at root_pose realising hand_pose, the approach clear of the table, the squeeze pressing
-//! each contact by the set depth into the object and not into the table — and ranked
-//! candidates.
+//! each contact by the set depth into the object and not into the table (but for fingertips
+//! pressed onto it beside a low object, said in the plan) — and ranked candidates.
 
 use graspd_core::hand::kinematics::KinematicHand;
 use graspd_core::planning::{
@@ -67,7 +67,8 @@ fn posed<'m>(
 /// its hand frame on hand_pose; the pre-grasp is hand_pose backed off along the unit approach;
 /// feasible plans touch the object on both sides (with three fingers or the palm, for a hand
 /// that has a third finger), clear of the table (1 mm) at the grasp, the
-/// squeeze and the pre-grasp, and keep the object's points out of the hand (but for what a
+/// squeeze (but where the plan warns that its squeeze presses onto the table) and the
+/// pre-grasp, and keep the object's points out of the hand (but for what a
 /// linkage's first finger pushes).
 #[test]
 fn shared_hands_plan_executable_grasps_on_ycb_views() {
@@ -147,6 +148,12 @@ fn shared_hands_plan_executable_grasps_on_ycb_views() {
                 p.quality.robustness
             );
             let plane = p.support_plane.expect("a support plane was given");
+            // The squeeze (a force command) may press onto the table only where the plan says
+            // so (`pressed_on_table`).
+            let on_table = p
+                .warnings
+                .iter()
+                .any(|w| w.starts_with("the squeeze presses"));
             for (what, joints, pose) in [
                 ("grasp", &p.joints, &p.hand_pose),
                 ("squeeze", &p.squeeze_joints, &p.hand_pose),
@@ -154,7 +161,7 @@ fn shared_hands_plan_executable_grasps_on_ycb_views() {
             ] {
                 let c = posed(&m, &values(joints), pose).plane_clearance(&plane);
                 assert!(
-                    c >= -0.001,
+                    c >= -0.001 || (what == "squeeze" && on_table),
                     "{file} {object:?}: the {what} reaches {c} m into the table"
                 );
             }
@@ -359,6 +366,84 @@ fn the_squeeze_presses_contacts_by_the_set_depth_and_not_the_table() {
             );
         }
     }
+}
+
+/// Beside a low object the fingertips come down to the table: the Shadow's grasps of the
+/// 33 mm tall tuna can whose squeeze presses a fingertip onto the table are feasible when that
+/// is all they lack (the table stops the link as the object stops the others; MuJoCo held 29
+/// of 32 such plans) — the hand clear of the table at the grasp and the pre-grasp, the plan
+/// saying how far its squeeze reaches into the table, and the contacts pressed into the object
+/// still. A plan whose squeeze stays off the table carries no such warning.
+#[test]
+fn a_squeeze_may_press_fingertips_onto_the_table_beside_a_low_object() {
+    let m = model("shadow_hand/right_hand.xml");
+    let mut on_table = 0;
+    for seed in 1..=5 {
+        let p = plan_with(&m, Object::TunaFishCan, seed, PlannerOptions::default());
+        let plane = p.support_plane.unwrap();
+        let qs = values(&p.squeeze_joints);
+        let squeeze = posed(&m, &qs, &p.hand_pose).plane_clearance(&plane);
+        let warning = p
+            .warnings
+            .iter()
+            .find(|w| w.starts_with("the squeeze presses the hand"));
+        println!(
+            "seed {seed}: feasible {} squeeze clearance {squeeze:.4} {warning:?}",
+            p.feasible
+        );
+        let Some(w) = warning else {
+            assert!(
+                squeeze >= -0.001,
+                "seed {seed}: no warning, squeeze {squeeze}"
+            );
+            continue;
+        };
+        on_table += 1;
+        assert!(squeeze < -0.001, "seed {seed}: {w}");
+        let said: f64 = w
+            .split_whitespace()
+            .nth(5)
+            .and_then(|x| x.parse().ok())
+            .expect("the depth in mm");
+        assert!(
+            (said - squeeze * -1e3).abs() <= 0.51,
+            "seed {seed}: {w} for {squeeze}"
+        );
+        assert!(p.feasible, "seed {seed}: {:?}", p.infeasible_reason);
+        for (joints, pose) in [
+            (&p.joints, &p.hand_pose),
+            (&p.pregrasp_joints, &p.pregrasp_pose),
+        ] {
+            let c = posed(&m, &values(joints), pose).plane_clearance(&plane);
+            assert!(
+                c >= -0.001,
+                "seed {seed}: the hand reaches {c} m into the table"
+            );
+        }
+        // The squeeze still presses the contacts into the object.
+        let qg = values(&p.joints);
+        let (fk_g, fk_s) = (
+            m.hand.tree.forward(&qg).unwrap(),
+            m.hand.tree.forward(&qs).unwrap(),
+        );
+        let root: Isometry3<f64> =
+            p.hand_pose.isometry() * m.hand.hand_frame_in_root(&qg).unwrap().inverse();
+        let pressed = p
+            .contacts
+            .iter()
+            .filter(|c| c.finger != "palm")
+            .map(|c| {
+                let b = m.hand.tree.body_index(c.link.as_deref().unwrap()).unwrap();
+                let local = (root * fk_g.body_poses[b]).inverse() * c.position;
+                (root * fk_s.body_poses[b] * local - c.position).dot(&-c.normal)
+            })
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert!(
+            pressed > 0.005,
+            "seed {seed}: the squeeze presses {pressed} m at most"
+        );
+    }
+    assert!(on_table >= 2, "{on_table} of 5 plans press onto the table");
 }
 
 /// A given parallel-jaw grasp g = {x, y, z, θ} (`hints.parallel_grasp`, ch. 3) is realised as

@@ -332,6 +332,13 @@ fn plan_of_final(
         final_plane_clearance: final_clearance,
     };
     let mut warnings = Vec::new();
+    if let Some(depth) = fc.squeeze_into_table() {
+        warnings.push(format!(
+            "the squeeze presses the hand {:.0} mm into the table: the table stops the links \
+             that reach it, and what they press on it does not press the object",
+            depth * 1e3
+        ));
+    }
     if fc.push > 0.002 {
         warnings.push(format!(
             "the linked fingers push the object {:.0} mm before both touch",

@@ -31,8 +31,8 @@ impl FinalConfiguration {
             root_in_world: self.root_pose,
         };
         let pre = std::mem::take(&mut self.pregrasp);
-        let squeeze;
-        (squeeze, self.pregrasp, self.plane_clearance) = grip(
+        let (squeeze, clearance);
+        (squeeze, self.pregrasp, clearance) = grip(
             ctx,
             model,
             object,
@@ -45,6 +45,8 @@ impl FinalConfiguration {
             s0,
         )?;
         (self.squeeze, self.sliding) = (squeeze.joints, squeeze.slides);
+        self.plane_clearance = clearance.map(|c| c.grasp);
+        self.squeeze_clearance = clearance.map(|c| c.squeeze);
         Ok(self)
     }
 }
@@ -58,9 +60,17 @@ pub(super) struct Pending {
     pub s0: f64,
 }
 
-/// The squeeze, pre-grasp joints, and the least clearance of the grasp and the squeeze to
-/// the table (None without one).
-type Grip = (squeeze::Squeeze, Vec<f64>, Option<f64>);
+/// The squeeze, pre-grasp joints, and the clearance of the grasp and the squeeze to the table
+/// (None without one).
+type Grip = (squeeze::Squeeze, Vec<f64>, Option<TableClearance>);
+
+/// The hand's least clearance to the table (m, negative inside it) with the grasp joints and
+/// with the squeeze joints.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct TableClearance {
+    pub grasp: f64,
+    pub squeeze: f64,
+}
 
 /// Module step 3 and the pre-grasp opening of a closed candidate ([`Grip`]).
 #[allow(clippy::too_many_arguments)]
@@ -116,15 +126,19 @@ pub(super) fn grip(
             break;
         }
     }
-    // The table at the grasp and the squeeze (the pre-grasp and the way in were kept clear).
+    // The table at the grasp and under the squeeze (the pre-grasp and the way in were kept
+    // clear).
     let plane_clearance = match object.plane {
         Some(pl) => {
-            let mut c = f64::INFINITY;
-            for q in [&closed.joints, &squeeze.joints] {
+            let mut c = [0.0; 2];
+            for (c, q) in c.iter_mut().zip([&closed.joints, &squeeze.joints]) {
                 let fk = hand.tree.forward(q)?;
-                c = c.min(model.collision.posed_fk(&fk, &root).plane_clearance(pl));
+                *c = model.collision.posed_fk(&fk, &root).plane_clearance(pl);
             }
-            Some(c)
+            Some(TableClearance {
+                grasp: c[0],
+                squeeze: c[1],
+            })
         }
         None => None,
     };

@@ -286,7 +286,7 @@ fn judge_with(
     };
     // The squeeze and the pre-grasp opening: now for a candidate the contacts leave in the
     // running, when it is output for one they already rule out (`completed`).
-    let (squeeze, sliding, q_pre, plane_clearance, pending) = if early.is_some() {
+    let (squeeze, sliding, q_pre, clearance, pending) = if early.is_some() {
         let pending = Pending {
             closed: closed.clone(),
             s0,
@@ -298,12 +298,18 @@ fn judge_with(
         )?;
         (squeeze.joints, squeeze.slides, q_pre, clearance, None)
     };
+    let into_table = clearance
+        .map(|c| c.grasp.min(c.squeeze))
+        .filter(|&c| c < -PLANE_TOLERANCE);
+    let squeeze_only = clearance.is_some_and(|c| c.grasp >= -PLANE_TOLERANCE);
+    let contacts_fail = early.is_some();
     let reason = if early.is_some() {
         early
-    } else if plane_clearance.is_some_and(|c| c < -PLANE_TOLERANCE) {
+    } else if let Some(c) = into_table {
         Some(format!(
-            "the closed hand reaches {:.1} mm into the support plane",
-            -plane_clearance.unwrap_or(0.0) * 1e3
+            "the {} hand reaches {:.1} mm into the support plane",
+            if squeeze_only { "squeezing" } else { "closed" },
+            -c * 1e3
         ))
     } else if closed.push > MAX_PUSH {
         Some(format!(
@@ -346,13 +352,19 @@ fn judge_with(
         sliding,
         gii,
         robustness: Robustness::default(),
-        plane_clearance,
+        plane_clearance: clearance.map(|c| c.grasp),
+        squeeze_clearance: clearance.map(|c| c.squeeze),
         push: closed.push,
         feasible: reason.is_none(),
         two_sided: h1_side && h2_side,
         short_of_epsilon_only: reason
             .as_deref()
             .is_some_and(|r| r.starts_with("final configuration: S")),
+        on_table_only: !contacts_fail
+            && into_table.is_some()
+            && squeeze_only
+            && closed.push <= MAX_PUSH
+            && gii >= ctx.options.epsilon,
         reason,
         score,
         cut: false,
