@@ -216,6 +216,7 @@ pub fn run_clutter_trial(
     let image = trial.render(opts.intrinsics, opts.camera);
     let mut ask = PlanAsk {
         object: Some(name.clone()),
+        mode: opts.mode,
         ..PlanAsk::default()
     };
     let mut plan_s = 0.0;
