@@ -25,8 +25,9 @@
 //!    inside both friction cones), the
 //!    grasp and the squeeze are clear of the table (a squeeze that presses onto it is accepted
 //!    when the search has nothing feasible otherwise: `pressed_on_table`) and linked fingers
-//!    push the object at most [`MAX_PUSH`]; ranked by the force at the estimated centre of mass the contacts resist in
-//!    their weakest direction ([`super::robustness`]), then by Q of Eq 5.2. A candidate its
+//!    push the object at most [`MAX_PUSH`]; ranked by the force at the estimated centre of
+//!    mass the contacts resist in their weakest direction ([`super::robustness`]), then by Q
+//!    of Eq 5.2. A candidate its
 //!    contacts alone rule out (one side touched, a pair outside its friction cones or driven
 //!    each on its own) gets its squeeze and opening ([`grip`]) only if it is output.
 //!
