@@ -2,6 +2,8 @@
 
 use graspd_core::cloud::io::write_ply_ascii;
 use graspd_e2e::{Server, binary, cylinder, http};
+use graspd_testkit::view::standard_view;
+use graspd_testkit::ycb::Object;
 use std::process::{Command, Output};
 
 fn graspctl(server: &Server, args: &[&str]) -> Output {
@@ -122,6 +124,67 @@ fn plan_prints_a_summary_and_json() {
     );
     assert!(!out.status.success());
     assert!(text(&out.stderr).contains("/nonexistent.ply"));
+}
+
+/// `--mode learned_quality` (issue 18): the imported 2F-85 plans a soup can's single view with
+/// the built-in grasp-quality network, and the summary says what the search found; an unknown
+/// mode is refused before anything is sent.
+#[test]
+fn plan_with_the_learned_quality() {
+    let gripper = graspd_testkit::testdata_dir().join("hands/robotiq_2f85/2f85.xml");
+    let import = format!("robotiq_2f85={}", gripper.display());
+    let server = Server::start_with(&["--import-hand", &import]);
+    let view = standard_view(Object::TomatoSoupCan, 2000, 2);
+    let path = cloud_file("soup_can.ply");
+    std::fs::write(&path, write_ply_ascii(&view.object_cloud().points, None)).unwrap();
+    let (pl, vp) = (view.support_plane, view.viewpoint);
+    let plane = format!(
+        "{},{},{},{}",
+        pl.normal.x, pl.normal.y, pl.normal.z, pl.offset
+    );
+    let viewpoint = format!("{},{},{}", vp.x, vp.y, vp.z);
+    let plan = |extra: &[&str]| {
+        let mut args = vec![
+            "plan",
+            "--cloud",
+            path.to_str().unwrap(),
+            "--hand",
+            "robotiq_2f85",
+            "--seed",
+            "3",
+            "--support-plane",
+            &plane,
+            "--viewpoint",
+            &viewpoint,
+        ];
+        args.extend_from_slice(extra);
+        graspctl(&server, &args)
+    };
+    let out = plan(&["--mode", "learned_quality"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    for needle in [
+        "mode learned_quality",
+        "learned quality P(success)",
+        "network calls of",
+    ] {
+        assert!(stdout.contains(needle), "missing '{needle}' in\n{stdout}");
+    }
+    // The dual-stage plan has no learned quality to report.
+    let out = plan(&[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.contains("mode dual_stage") && !stdout.contains("learned quality"),
+        "{stdout}"
+    );
+    let out = plan(&["--mode", "best"]);
+    assert!(!out.status.success());
+    assert!(
+        text(&out.stderr).contains("unknown planner mode 'best'"),
+        "{}",
+        text(&out.stderr)
+    );
 }
 
 const TACTILE_RECORDING: &str = "tactile/biotac_slide/mat5/mat5_1_bio.csv";

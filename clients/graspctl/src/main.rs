@@ -137,8 +137,12 @@ struct PlanArgs {
     /// Approach near this point, x,y,z.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
     attention: Option<Point3<f64>>,
-    /// The "without opposition" ablation (Table 5.1): skip stage 1.
-    #[arg(long)]
+    /// The planner: dual_stage (the method), without_opposition (Table 5.1's ablation: skip
+    /// stage 1) or learned_quality (ch. 3's learned parallel-jaw quality, a two-jaw gripper).
+    #[arg(long, value_name = "MODE", default_value = "dual_stage")]
+    mode: PlannerMode,
+    /// The "without opposition" ablation (Table 5.1): skip stage 1 (as `--mode without_opposition`).
+    #[arg(long, conflicts_with = "mode")]
     without_opposition: bool,
 }
 
@@ -327,7 +331,7 @@ fn build_request(args: &PlanArgs) -> Result<PlanRequest, CliError> {
             mode: if args.without_opposition {
                 PlannerMode::WithoutOpposition
             } else {
-                PlannerMode::DualStage
+                args.mode
             },
             ..PlannerOptions::default()
         },

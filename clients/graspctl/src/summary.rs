@@ -170,6 +170,13 @@ pub fn plan(plan: &GraspPlan) -> String {
         )
     };
     let _ = writeln!(w, "collision       {collision}");
+    if let Some(lq) = &plan.learned_quality {
+        let _ = writeln!(
+            w,
+            "learned quality P(success) {:.3}; search posterior {:.3} ± {:.3}; {} network calls of {} candidates",
+            lq.probability, lq.posterior_mean, lq.posterior_std, lq.network_calls, lq.candidates
+        );
+    }
     let _ = writeln!(w, "stage 1         {}", stage(&plan.stage1));
     let _ = writeln!(w, "stage 2         {}", stage(&plan.stage2));
     let t = &plan.timings;

@@ -22,6 +22,12 @@ pub enum PlannerMode {
 }
 
 impl PlannerMode {
+    pub const ALL: [PlannerMode; 3] = [
+        PlannerMode::DualStage,
+        PlannerMode::WithoutOpposition,
+        PlannerMode::LearnedQuality,
+    ];
+
     /// The snake_case name used in the API.
     pub fn name(self) -> &'static str {
         match self {
@@ -29,6 +35,21 @@ impl PlannerMode {
             PlannerMode::WithoutOpposition => "without_opposition",
             PlannerMode::LearnedQuality => "learned_quality",
         }
+    }
+}
+
+impl std::str::FromStr for PlannerMode {
+    type Err = String;
+    /// The mode by its API name (a command line's `--mode`).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        PlannerMode::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "unknown planner mode '{s}' (expected one of dual_stage, without_opposition, learned_quality)"
+                )
+            })
     }
 }
 
