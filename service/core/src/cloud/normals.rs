@@ -33,7 +33,11 @@ impl CloudIndex {
     }
 
     /// Indices of the points closer than `radius`, in no particular order.
-    pub fn within_unsorted(&self, p: &Point3<f64>, radius: f64) -> impl Iterator<Item = usize> {
+    pub fn within_unsorted(
+        &self,
+        p: &Point3<f64>,
+        radius: f64,
+    ) -> impl Iterator<Item = usize> + use<> {
         // An iterator over kiddo's own result: the hot callers stop at the first hit
         // (`PosedCollision::any_within`) or only loop, so no second Vec is built.
         self.tree
