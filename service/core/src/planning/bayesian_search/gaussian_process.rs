@@ -26,12 +26,18 @@ impl Kernel {
     /// k(g_i, g_j) of Eq 3.4 without the noise term (i ≠ j, or the latent function at one
     /// point).
     pub fn covariance(&self, a: &[f64], b: &[f64]) -> f64 {
-        let d2: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
-        self.signal_variance * (-d2 / (2.0 * self.length * self.length)).exp()
+        self.signal_variance * correlation(self.length, a, b)
     }
 }
 
 /// The prior mean function.
+/// exp(−‖a − b‖² / 2ℓ²): [`Kernel::covariance`] over the signal variance (a caller that keeps
+/// these for a fixed bandwidth gets the very covariances the kernel computes).
+pub fn correlation(length: f64, a: &[f64], b: &[f64]) -> f64 {
+    let d2: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
+    (-d2 / (2.0 * length * length)).exp()
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Prior {
     /// m(g) = 0 (Eq 3.3 as printed).
@@ -56,6 +62,20 @@ impl GaussianProcess {
     /// Fits the process to grasps `points` (feature vectors of one length) with qualities
     /// `values`; None when there are none or the covariance is not positive definite.
     pub fn fit(points: &[Vec<f64>], values: &[f64], kernel: Kernel, prior: Prior) -> Option<Self> {
+        Self::fit_covariances(points, values, kernel, prior, |i, j| {
+            kernel.covariance(&points[i], &points[j])
+        })
+    }
+
+    /// [`Self::fit`] with the kernel's covariance between the `i`th and the `j`th of `points`
+    /// (noise excluded) given by `covariance(i, j)`.
+    pub fn fit_covariances(
+        points: &[Vec<f64>],
+        values: &[f64],
+        kernel: Kernel,
+        prior: Prior,
+        covariance: impl Fn(usize, usize) -> f64,
+    ) -> Option<Self> {
         let n = points.len();
         if n == 0 || values.len() != n {
             return None;
@@ -65,8 +85,7 @@ impl GaussianProcess {
             Prior::DataMean => values.iter().sum::<f64>() / n as f64,
         };
         let k = DMatrix::from_fn(n, n, |i, j| {
-            kernel.covariance(&points[i], &points[j])
-                + if i == j { kernel.noise_variance } else { 0.0 }
+            covariance(i, j) + if i == j { kernel.noise_variance } else { 0.0 }
         });
         let cholesky = k.cholesky()?;
         let y = DVector::from_iterator(n, values.iter().map(|v| v - mean));
@@ -88,9 +107,26 @@ impl GaussianProcess {
         kernels: &[Kernel],
         prior: Prior,
     ) -> Option<Self> {
+        Self::fit_evidence_covariances(points, values, kernels, prior, |k, i, j| {
+            kernels[k].covariance(&points[i], &points[j])
+        })
+    }
+
+    /// [`Self::fit_evidence`] with the `k`th kernel's covariances given by
+    /// `covariance(k, i, j)` (as in [`Self::fit_covariances`]).
+    pub fn fit_evidence_covariances(
+        points: &[Vec<f64>],
+        values: &[f64],
+        kernels: &[Kernel],
+        prior: Prior,
+        covariance: impl Fn(usize, usize, usize) -> f64,
+    ) -> Option<Self> {
         kernels
             .iter()
-            .filter_map(|k| Self::fit(points, values, *k, prior))
+            .enumerate()
+            .filter_map(|(k, kernel)| {
+                Self::fit_covariances(points, values, *kernel, prior, |i, j| covariance(k, i, j))
+            })
             .max_by(|a, b| {
                 a.log_marginal_likelihood()
                     .total_cmp(&b.log_marginal_likelihood())
@@ -100,12 +136,18 @@ impl GaussianProcess {
     /// The posterior of the quality at `g` (Eq 3.5): its mean μ and variance σ² (of the latent
     /// function, without the observation noise).
     pub fn posterior(&self, g: &[f64]) -> (f64, f64) {
-        let ks = DVector::from_iterator(
+        self.posterior_of(DVector::from_iterator(
             self.points.len(),
             self.points.iter().map(|p| self.kernel.covariance(g, p)),
-        );
+        ))
+    }
+
+    /// [`Self::posterior`] at a grasp whose covariances with the fitted points (in their
+    /// order, noise excluded) are `ks`.
+    pub fn posterior_of(&self, ks: DVector<f64>) -> (f64, f64) {
         let mu = self.mean + ks.dot(&self.alpha);
-        let v = self.cholesky.l().solve_lower_triangular(&ks);
+        // The factor's upper triangle is not read: no copy of L per grasp.
+        let v = self.cholesky.l_dirty().solve_lower_triangular(&ks);
         let var = match v {
             Some(v) => (self.kernel.signal_variance - v.norm_squared()).max(0.0),
             None => self.kernel.signal_variance,

@@ -19,6 +19,7 @@
 pub mod gaussian_process;
 
 use gaussian_process::{GaussianProcess, Kernel, Prior};
+use nalgebra::DVector;
 use rand::RngExt;
 use rand::SeedableRng;
 use rand::rngs::StdRng;
@@ -104,14 +105,19 @@ pub fn bayesian_search<E>(
     let mut is_queried = vec![false; n];
     first.iter().for_each(|&i| is_queried[i] = true);
     let mut since_better = 0;
-    let mut gp = fit(features, &queried, &values);
+    let mut correlations = Correlations::default();
+    first.iter().for_each(|&q| correlations.add(features, q));
+    let mut gp = fit(features, &queried, &values, &correlations);
     while queried.len() < budget && since_better < options.patience {
-        let Some(model) = &gp else { break };
+        let Some((model, length)) = &gp else { break };
         // Eq 3.6 over the unqueried members.
+        let sf2 = model.kernel().signal_variance;
+        let rows = &correlations.rows[*length];
         let next = (0..n)
             .filter(|&i| !is_queried[i])
             .map(|i| {
-                let (mu, var) = model.posterior(&features[i]);
+                let ks = DVector::from_iterator(rows.len(), rows.iter().map(|r| sf2 * r[i]));
+                let (mu, var) = model.posterior_of(ks);
                 (i, mu + options.beta * var.sqrt())
             })
             .max_by(|a, b| a.1.total_cmp(&b.1));
@@ -132,9 +138,10 @@ pub fn bayesian_search<E>(
             since_better += 1;
         }
         best_after.push(values[best]);
-        gp = fit(features, &queried, &values);
+        correlations.add(features, next);
+        gp = fit(features, &queried, &values, &correlations);
     }
-    let (posterior_mean, posterior_std) = gp.as_ref().map_or((values[best], 0.0), |m| {
+    let (posterior_mean, posterior_std) = gp.as_ref().map_or((values[best], 0.0), |(m, _)| {
         let (mu, var) = m.posterior(&features[queried[best]]);
         (mu, var.sqrt())
     });
@@ -183,8 +190,14 @@ pub fn monte_carlo_search<E>(
 }
 
 /// The process fitted to the queried grasps, its kernel the most probable of a small grid
-/// (bandwidth × noise) with the function variance of the data.
-fn fit(features: &[Vec<f64>], queried: &[usize], values: &[f64]) -> Option<GaussianProcess> {
+/// (bandwidth × noise) with the function variance of the data; with the index of its
+/// bandwidth in [`LENGTHS`].
+fn fit(
+    features: &[Vec<f64>],
+    queried: &[usize],
+    values: &[f64],
+    correlations: &Correlations,
+) -> Option<(GaussianProcess, usize)> {
     let points: Vec<Vec<f64>> = queried.iter().map(|&i| features[i].clone()).collect();
     let m = values.iter().sum::<f64>() / values.len() as f64;
     let var = values.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / values.len() as f64;
@@ -199,7 +212,39 @@ fn fit(features: &[Vec<f64>], queried: &[usize], values: &[f64]) -> Option<Gauss
             })
         })
         .collect();
-    GaussianProcess::fit_evidence(&points, values, &kernels, Prior::DataMean)
+    let length_of = |k: usize| k / NOISE_FRACTIONS.len();
+    let gp = GaussianProcess::fit_evidence_covariances(
+        &points,
+        values,
+        &kernels,
+        Prior::DataMean,
+        |k, i, j| signal_variance * correlations.rows[length_of(k)][i][queried[j]],
+    )?;
+    let length = LENGTHS.iter().position(|&l| l == gp.kernel().length)?;
+    Some((gp, length))
+}
+
+/// The kernel's correlations ([`gaussian_process::correlation`]) of each queried grasp with
+/// every pool member, per bandwidth of [`LENGTHS`], in the order queried: computed once a
+/// grasp, where every fit (8 kernels × n² pairs) and every bound (pool × n) would compute them
+/// again — the search's cost, the same numbers.
+#[derive(Default)]
+struct Correlations {
+    rows: [Vec<Vec<f64>>; LENGTHS.len()],
+}
+
+impl Correlations {
+    fn add(&mut self, features: &[Vec<f64>], queried: usize) {
+        for (rows, &length) in self.rows.iter_mut().zip(&LENGTHS) {
+            let q = &features[queried];
+            rows.push(
+                features
+                    .iter()
+                    .map(|f| gaussian_process::correlation(length, q, f))
+                    .collect(),
+            );
+        }
+    }
 }
 
 /// `k` pool members spread by farthest-point sampling from a random first one.
