@@ -30,7 +30,6 @@ impl Kernel {
     }
 }
 
-/// The prior mean function.
 /// exp(−‖a − b‖² / 2ℓ²): [`Kernel::covariance`] over the signal variance (a caller that keeps
 /// these for a fixed bandwidth gets the very covariances the kernel computes).
 pub fn correlation(length: f64, a: &[f64], b: &[f64]) -> f64 {
@@ -38,6 +37,7 @@ pub fn correlation(length: f64, a: &[f64], b: &[f64]) -> f64 {
     (-d2 / (2.0 * length * length)).exp()
 }
 
+/// The prior mean function.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Prior {
     /// m(g) = 0 (Eq 3.3 as printed).
