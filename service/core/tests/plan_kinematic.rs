@@ -371,9 +371,10 @@ fn the_squeeze_presses_contacts_by_the_set_depth_and_not_the_table() {
 /// Beside a low object the fingertips come down to the table: the Shadow's grasps of the
 /// 33 mm tall tuna can whose squeeze presses a fingertip onto the table are feasible when that
 /// is all they lack (the table stops the link as the object stops the others; MuJoCo held 29
-/// of 32 such plans) — the hand clear of the table at the grasp and the pre-grasp, the plan
-/// saying how far its squeeze reaches into the table, and the contacts pressed into the object
-/// still. A plan whose squeeze stays off the table carries no such warning.
+/// of 32 such plans; those also short of S ≥ ε stay infeasible) — the hand clear of the table
+/// at the grasp and the pre-grasp, the plan saying how far its squeeze reaches into the table,
+/// and the contacts pressed into the object still. A plan whose squeeze stays off the table
+/// carries no such warning.
 #[test]
 fn a_squeeze_may_press_fingertips_onto_the_table_beside_a_low_object() {
     let m = model("shadow_hand/right_hand.xml");
@@ -398,7 +399,6 @@ fn a_squeeze_may_press_fingertips_onto_the_table_beside_a_low_object() {
             );
             continue;
         };
-        on_table += 1;
         assert!(squeeze < -0.001, "seed {seed}: {w}");
         let said: f64 = w
             .split_whitespace()
@@ -409,7 +409,21 @@ fn a_squeeze_may_press_fingertips_onto_the_table_beside_a_low_object() {
             (said - squeeze * -1e3).abs() <= 0.51,
             "seed {seed}: {w} for {squeeze}"
         );
-        assert!(p.feasible, "seed {seed}: {:?}", p.infeasible_reason);
+        // Infeasible only when more than the table rules it out: S short of ε with no firm
+        // robustness standing in for it.
+        if p.feasible {
+            on_table += 1;
+        } else {
+            assert!(
+                p.quality.gii < PlannerOptions::default().epsilon
+                    && p.quality.robustness
+                        < graspd_core::planning::final_configuration::FIRM_ROBUSTNESS,
+                "seed {seed}: {:?} with S {} and robustness {}",
+                p.infeasible_reason,
+                p.quality.gii,
+                p.quality.robustness
+            );
+        }
         for (joints, pose) in [
             (&p.joints, &p.hand_pose),
             (&p.pregrasp_joints, &p.pregrasp_pose),
@@ -443,7 +457,10 @@ fn a_squeeze_may_press_fingertips_onto_the_table_beside_a_low_object() {
             "seed {seed}: the squeeze presses {pressed} m at most"
         );
     }
-    assert!(on_table >= 2, "{on_table} of 5 plans press onto the table");
+    assert!(
+        on_table >= 2,
+        "{on_table} of 5 plans press onto the table and are feasible"
+    );
 }
 
 /// A given parallel-jaw grasp g = {x, y, z, θ} (`hints.parallel_grasp`, ch. 3) is realised as

@@ -1,5 +1,5 @@
-//! A scene for the planning stages' unit tests: a rod lying on a table, seen from above, and
-//! the search context of a built-in hand on it.
+//! A scene for the planning stages' unit tests: a rod (or another object) on a table, seen
+//! from above, and the search context of a built-in hand on it.
 
 use super::evaluation::SearchContext;
 use super::object_shape::ObjectShape;
@@ -34,6 +34,11 @@ impl Rod {
                 ));
             }
         }
+        Self::with_points(points, hand, grasp_type)
+    }
+
+    /// Another object on the table z = 0 (its points), with a built-in hand's grasp of one type.
+    pub fn with_points(points: Vec<Point3<f64>>, hand: &str, grasp_type: GraspType) -> Self {
         let hand = HandCatalog::builtin().get(hand).unwrap().clone();
         let grasp = hand.resolve_forced(grasp_type).unwrap();
         Self {

@@ -23,6 +23,9 @@ const SWAPPED_PRIOR: f64 = 0.3;
 /// Oppositions ranked before this (the best and its centre-height version) are also tried
 /// with their ends swapped.
 const SWAPPED_BELOW: f64 = 1.0;
+/// Half the thickness of the object's section at the centre-of-mass height (along the
+/// support's normal and across the opposition's line), m: a few cloud spacings at 1 m.
+const SECTION_HALF_WIDTH: f64 = 0.004;
 
 /// The candidates to judge, in order: (opposition, direction) — the approach direction for a
 /// finger opposition, the axis the fingers wrap around for a palm opposition
@@ -106,9 +109,12 @@ pub(super) fn candidate_order(
 }
 
 /// The opposition `(a, b)` moved along the support's normal to the height of the estimated
-/// centre of mass: each point replaced by the cloud point nearest to it at that height, on the
-/// same side. None without a support plane, when the move is under a centimetre, or when no
-/// point lies within a centimetre of the moved one.
+/// centre of mass: the object's section there, in the upright plane through the opposition's
+/// line, and its two outermost points along the line (where closing jaws meet it first: on a
+/// bottle that narrows toward its top the section at the centre is wider than the shoulder, and
+/// the moved points lie inside it). None without a support plane, when the move is under a
+/// centimetre, for a line within 30° of the normal, or when the section has no point on either
+/// side of the moved midpoint.
 fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usize, usize)> {
     let up = ctx.plane.as_ref()?.normal;
     let mid = nalgebra::Point3::from((ctx.points[a].coords + ctx.points[b].coords) / 2.0);
@@ -116,11 +122,28 @@ fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usiz
     if shift.abs() < 0.01 {
         return None;
     }
-    let moved = |i: usize| {
-        let (k, d) = ctx.index.nearest_one(&(ctx.points[i] + up * shift));
-        (d <= 0.01).then_some(k)
-    };
-    Some((moved(a)?, moved(b)?))
+    let raw = ctx.points[b] - ctx.points[a];
+    let line = (raw - up * raw.dot(&up)).try_normalize(1e-9)?;
+    if line.dot(&raw.normalize()) < 60f64.to_radians().cos() {
+        return None;
+    }
+    let across = up.cross(&line);
+    let centre = mid + up * shift;
+    let (mut lo, mut hi) = (None::<(usize, f64)>, None::<(usize, f64)>);
+    for (k, p) in ctx.points.iter().enumerate() {
+        let d = p - centre;
+        if d.dot(&up).abs() > SECTION_HALF_WIDTH || d.dot(&across).abs() > SECTION_HALF_WIDTH {
+            continue;
+        }
+        let s = d.dot(&line);
+        if s < 0.0 && lo.is_none_or(|(_, m)| s < m) {
+            lo = Some((k, s));
+        }
+        if s > 0.0 && hi.is_none_or(|(_, m)| s > m) {
+            hi = Some((k, s));
+        }
+    }
+    Some((lo?.0, hi?.0))
 }
 
 #[cfg(test)]
@@ -175,5 +198,44 @@ mod tests {
         assert!(order.iter().all(|(_, d)| d.dot(&line).abs() < 1e-9));
         assert!(order[0].1.x.abs() > 0.99, "{:?}", order[0].1);
         assert!((order[0].1 + order[1].1).norm() < 1e-9);
+    }
+
+    /// A bottle narrowing toward its top (radius 40 mm at the table, 12 mm at 20 cm): an
+    /// opposition across its top, moved to the centre's height, lands on the wall there, not
+    /// on the points nearest to its ends moved down (13–14 mm inside the wall).
+    #[test]
+    fn the_centre_height_opposition_lies_on_the_section_there() {
+        let radius = |z: f64| 0.04 - 0.028 * z / 0.2;
+        let mut points = Vec::new();
+        for i in 0..=40 {
+            let z = 0.005 * i as f64;
+            for k in 0..48 {
+                let a = std::f64::consts::TAU * k as f64 / 48.0;
+                points.push(Point3::new(radius(z) * a.cos(), radius(z) * a.sin(), z));
+            }
+        }
+        let bottle = Rod::with_points(points, "parallel_gripper", GraspType::Pinch);
+        let normals = bottle.normals();
+        let top = 0.195;
+        let (a, b) = (
+            bottle.nearest(Point3::new(-radius(top), 0.0, top)),
+            bottle.nearest(Point3::new(radius(top), 0.0, top)),
+        );
+        let ctx = bottle.context(&normals, a);
+        let zc = bottle.shape.center.z;
+        assert!(zc < 0.12, "centre at {zc}");
+        let (a2, b2) = at_centre_height(&ctx, (a, b)).expect("a section at the centre");
+        let (pa, pb) = (bottle.points[a2], bottle.points[b2]);
+        for (p, side) in [(pa, -1.0), (pb, 1.0)] {
+            assert!((p.z - zc).abs() <= SECTION_HALF_WIDTH + 1e-9, "{p:?}");
+            assert!(p.y.abs() <= SECTION_HALF_WIDTH + 1e-9, "{p:?}");
+            assert!(
+                (p.x - side * radius(p.z)).abs() < 0.002,
+                "{p:?} off the wall"
+            );
+        }
+        // An opposition already at the centre's height is not moved.
+        let level = |x: f64| bottle.nearest(Point3::new(x * radius(zc), 0.0, zc));
+        assert_eq!(at_centre_height(&ctx, (level(-1.0), level(1.0))), None);
     }
 }
