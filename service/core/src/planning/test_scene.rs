@@ -63,6 +63,18 @@ impl Rod {
         )
     }
 
+    /// Normals facing away from the centroid: every face seen (a wall's normal points out,
+    /// where [`Self::normals`] turns it toward the axis).
+    pub fn normals_outward(&self) -> LazyNormals<'_> {
+        LazyNormals::new(
+            &self.points,
+            &self.index,
+            12,
+            Orientation::AwayFromCentroid,
+            None,
+        )
+    }
+
     /// The point nearest to `p`.
     pub fn nearest(&self, p: Point3<f64>) -> usize {
         self.index.nearest_one(&p).0

@@ -243,9 +243,7 @@ impl FinalConfiguration {
         }
         self
     }
-}
 
-impl FinalConfiguration {
     /// The candidate accepted although its squeeze presses the hand into the table, when that
     /// is all it lacks and it holds by force closure (three or more contacts) — for a search
     /// that found no feasible candidate otherwise ([`search`]). The squeeze is the servos'

@@ -26,6 +26,16 @@ const SWAPPED_BELOW: f64 = 1.0;
 /// Half the thickness of the object's section at the centre-of-mass height (along the
 /// support's normal and across the opposition's line), m: a few cloud spacings at 1 m.
 const SECTION_HALF_WIDTH: f64 = 0.004;
+/// Angles between a chord and its ends' normals closer than this are not told apart, degrees:
+/// k-NN normals of a depth cloud are a few degrees off (the Shadow's fused orange and soup can
+/// chords, own 15° and 7°, turned 3° better, changed plan for nothing), while the 2F-85's fused
+/// mustard bottle's (own 27°, turned 15°) held only turned (docs/final-configuration.md).
+const NORMAL_NOISE_DEG: f64 = 10.0;
+/// Turns about the support's normal of the planes a two-finger gripper's centre-height section
+/// is cut along, degrees from the opposition's line (`at_centre_height`), up to across it.
+const SECTION_TURNS_DEG: [f64; 12] = [
+    0.0, 15.0, -15.0, 30.0, -30.0, 45.0, -45.0, 60.0, -60.0, 75.0, -75.0, 90.0,
+];
 
 /// The candidates to judge, in order: (opposition, direction) — the approach direction for a
 /// finger opposition, the axis the fingers wrap around for a palm opposition
@@ -109,12 +119,16 @@ pub(super) fn candidate_order(
 }
 
 /// The opposition `(a, b)` moved along the support's normal to the height of the estimated
-/// centre of mass: the object's section there, in the upright plane through the opposition's
-/// line, and its two outermost points along the line (where closing jaws meet it first: on a
-/// bottle that narrows toward its top the section at the centre is wider than the shoulder, and
-/// the moved points lie inside it). None without a support plane, when the move is under a
-/// centimetre, for a line within 30° of the normal, or when the section has no point on either
-/// side of the moved midpoint.
+/// centre of mass: the object's section there, in an upright plane through the moved midpoint,
+/// and its two outermost points along the line (where closing jaws meet it first: on a bottle
+/// that narrows toward its top the section at the centre is wider than the shoulder, and the
+/// moved points lie inside it). The plane is the opposition's own; for a two-finger gripper
+/// also those turned about the normal by [`SECTION_TURNS_DEG`], and of the chords the jaws span
+/// the one whose ends' normals lie closest along it (the most antipodal; the least turned on a
+/// tie) unless the own one is within [`NORMAL_NOISE_DEG`] of it — a box-like body seen turned
+/// from its shoulder (a mustard bottle) is otherwise taken across its corners. None without a
+/// support plane, when the move is under a centimetre, for a line within 30° of the normal, or
+/// when the section has no point on either side of the moved midpoint.
 fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usize, usize)> {
     let up = ctx.plane.as_ref()?.normal;
     let mid = nalgebra::Point3::from((ctx.points[a].coords + ctx.points[b].coords) / 2.0);
@@ -127,23 +141,64 @@ fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usiz
     if line.dot(&raw.normalize()) < 60f64.to_radians().cos() {
         return None;
     }
-    let across = up.cross(&line);
     let centre = mid + up * shift;
-    let (mut lo, mut hi) = (None::<(usize, f64)>, None::<(usize, f64)>);
-    for (k, p) in ctx.points.iter().enumerate() {
-        let d = p - centre;
-        if d.dot(&up).abs() > SECTION_HALF_WIDTH || d.dot(&across).abs() > SECTION_HALF_WIDTH {
+    let slab: Vec<usize> = (0..ctx.points.len())
+        .filter(|&k| (ctx.points[k] - centre).dot(&up).abs() <= SECTION_HALF_WIDTH)
+        .collect();
+    let chord = |line: Vector3<f64>| -> Option<(usize, usize)> {
+        let across = up.cross(&line);
+        let (mut lo, mut hi) = (None::<(usize, f64)>, None::<(usize, f64)>);
+        for &k in &slab {
+            let d = ctx.points[k] - centre;
+            if d.dot(&across).abs() > SECTION_HALF_WIDTH {
+                continue;
+            }
+            let s = d.dot(&line);
+            if s < 0.0 && lo.is_none_or(|(_, m)| s < m) {
+                lo = Some((k, s));
+            }
+            if s > 0.0 && hi.is_none_or(|(_, m)| s > m) {
+                hi = Some((k, s));
+            }
+        }
+        Some((lo?.0, hi?.0))
+    };
+    // (chord, the larger of its ends' angles to the line), the opposition's own plane first.
+    let mut own: Option<((usize, usize), f64)> = None;
+    let mut best: Option<((usize, usize), f64)> = None;
+    // A two-finger gripper's jaws take exactly the chord; a hand's fingers curl round the
+    // section and find their own contacts, and turned chords held them less often
+    // (docs/final-configuration.md, session 32).
+    let turns: &[f64] = match ctx.hand.fingers.len() {
+        2 => &SECTION_TURNS_DEG,
+        _ => &SECTION_TURNS_DEG[..1],
+    };
+    for &deg in turns {
+        let turned =
+            UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(up), deg.to_radians())
+                * line;
+        let Some((lo, hi)) = chord(turned) else {
+            continue;
+        };
+        if (ctx.points[hi] - ctx.points[lo]).dot(&turned) > ctx.hand.geometry.max_aperture {
             continue;
         }
-        let s = d.dot(&line);
-        if s < 0.0 && lo.is_none_or(|(_, m)| s < m) {
-            lo = Some((k, s));
+        let cos = (-ctx.normals.get(lo).dot(&turned)).min(ctx.normals.get(hi).dot(&turned));
+        let angle = cos.clamp(-1.0, 1.0).acos();
+        if deg == 0.0 {
+            own = Some(((lo, hi), angle));
         }
-        if s > 0.0 && hi.is_none_or(|(_, m)| s > m) {
-            hi = Some((k, s));
+        if best.is_none_or(|(_, a)| angle < a - 1e-9) {
+            best = Some(((lo, hi), angle));
         }
     }
-    Some((lo?.0, hi?.0))
+    match (own, best) {
+        (Some((o, a)), Some((_, b))) if b > a - NORMAL_NOISE_DEG.to_radians() => Some(o),
+        (_, Some((o, _))) => Some(o),
+        // Nothing the hand spans: the opposition's own section (a wider pre-shape may yet take
+        // it).
+        _ => chord(line),
+    }
 }
 
 #[cfg(test)]
@@ -215,7 +270,7 @@ mod tests {
             }
         }
         let bottle = Rod::with_points(points, "parallel_gripper", GraspType::Pinch);
-        let normals = bottle.normals();
+        let normals = bottle.normals_outward();
         let top = 0.195;
         let (a, b) = (
             bottle.nearest(Point3::new(-radius(top), 0.0, top)),
@@ -237,5 +292,56 @@ mod tests {
         // An opposition already at the centre's height is not moved.
         let level = |x: f64| bottle.nearest(Point3::new(x * radius(zc), 0.0, zc));
         assert_eq!(at_centre_height(&ctx, (level(-1.0), level(1.0))), None);
+    }
+
+    /// A tall box, 60 × 100 mm across: an opposition across a corner of its top (from the
+    /// −x face to the +y face, its line 60° from x), moved to the centre's height, lands on
+    /// two opposite faces there — the chord whose ends' normals lie along it — not across the
+    /// corner as the opposition's own plane cuts it (normals 60° and 30° off the line).
+    #[test]
+    fn the_centre_height_opposition_is_the_most_antipodal_chord() {
+        let (hx, hy) = (0.03, 0.05);
+        let mut points = Vec::new();
+        for i in 0..=40 {
+            let z = 0.005 * i as f64;
+            for k in 0..=12 {
+                let x = -hx + 2.0 * hx * k as f64 / 12.0;
+                points.extend([Point3::new(x, -hy, z), Point3::new(x, hy, z)]);
+            }
+            for k in 1..20 {
+                let y = -hy + 2.0 * hy * k as f64 / 20.0;
+                points.extend([Point3::new(-hx, y, z), Point3::new(hx, y, z)]);
+            }
+        }
+        let bx = Rod::with_points(points.clone(), "parallel_gripper", GraspType::Pinch);
+        let normals = bx.normals_outward();
+        let (a, b) = (
+            bx.nearest(Point3::new(-hx, -0.02, 0.19)),
+            bx.nearest(Point3::new(0.01, hy, 0.19)),
+        );
+        let ctx = bx.context(&normals, a);
+        let zc = bx.shape.center.z;
+        let (a2, b2) = at_centre_height(&ctx, (a, b)).expect("a section at the centre");
+        let (pa, pb) = (bx.points[a2], bx.points[b2]);
+        assert!((pa.z - zc).abs() <= SECTION_HALF_WIDTH + 1e-9, "{pa:?}");
+        let across_x = (pa.x + hx).abs() < 1e-9 && (pb.x - hx).abs() < 1e-9;
+        let across_y = (pa.y + hy).abs() < 1e-9 && (pb.y - hy).abs() < 1e-9;
+        assert!(
+            across_x || across_y,
+            "{pa:?} – {pb:?} not on opposite faces"
+        );
+        let width = (pb - pa).norm();
+        assert!(width <= ctx.hand.geometry.max_aperture, "{width}");
+        // A three-finger hand's fingers find their own contacts: its section stays in the
+        // opposition's own plane, across the corner.
+        let hand = Rod::with_points(points, "barrett", GraspType::Tripod);
+        let normals = hand.normals_outward();
+        let ctx = hand.context(&normals, a);
+        let (a3, b3) = at_centre_height(&ctx, (a, b)).expect("a section at the centre");
+        let (pa, pb) = (hand.points[a3], hand.points[b3]);
+        assert!(
+            (pa.x + hx).abs() < 1e-9 && (pb.y - hy).abs() < 1e-9,
+            "{pa:?} – {pb:?}"
+        );
     }
 }
