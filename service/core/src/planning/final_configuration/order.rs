@@ -163,17 +163,16 @@ fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usiz
         }
         Some((lo?.0, hi?.0))
     };
-    // (chord, the larger of its ends' angles to the line), the opposition's own plane first.
-    let mut own: Option<((usize, usize), f64)> = None;
-    let mut best: Option<((usize, usize), f64)> = None;
     // A two-finger gripper's jaws take exactly the chord; a hand's fingers curl round the
     // section and find their own contacts, and turned chords held them less often
     // (docs/final-configuration.md, session 32).
-    let turns: &[f64] = match ctx.hand.fingers.len() {
-        2 => &SECTION_TURNS_DEG,
-        _ => &SECTION_TURNS_DEG[..1],
-    };
-    for &deg in turns {
+    if ctx.hand.fingers.len() != 2 {
+        return chord(line);
+    }
+    // (chord, the larger of its ends' angles to the line), the opposition's own plane first.
+    let mut own: Option<((usize, usize), f64)> = None;
+    let mut best: Option<((usize, usize), f64)> = None;
+    for deg in SECTION_TURNS_DEG {
         let turned =
             UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(up), deg.to_radians())
                 * line;
@@ -195,7 +194,7 @@ fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usiz
     match (own, best) {
         (Some((o, a)), Some((_, b))) if b > a - NORMAL_NOISE_DEG.to_radians() => Some(o),
         (_, Some((o, _))) => Some(o),
-        // Nothing the hand spans: the opposition's own section (a wider pre-shape may yet take
+        // Nothing the jaws span: the opposition's own section (a wider pre-shape may yet take
         // it).
         _ => chord(line),
     }
