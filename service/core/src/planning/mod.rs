@@ -3,6 +3,7 @@
 pub mod annealing;
 pub mod bayesian_search;
 pub mod collision;
+pub mod dense_simplex;
 pub mod dual_stage;
 pub mod evaluation;
 pub mod ferrari_canny;

@@ -8,13 +8,14 @@
 //! inside a friction cone linearised by [`CONE_EDGES`] inscribed edges (μ cos(π/edges)), and, as a
 //! soft finger, a torsional moment of at most μ·r_patch times its normal force. The contacts must
 //! produce −t·d and no moment about the centre of mass; t is maximised by a linear program
-//! (microlp). Moments are divided by the object radius ρ only to condition the program.
+//! ([`super::dense_simplex`], with microlp behind it; session 33). Moments are divided by the
+//! object radius ρ only to condition the program.
 //!
 //! GII (Eq 5.3) stays the stability constraint S ≥ ε; this figure adds what S ignores: where
 //! the mass is and how much friction the contacts can call on.
 
+use super::dense_simplex::{DenseProgram, Row};
 use super::quality::{ContactPoint, tangents};
-use microlp::{ComparisonOp, OptimizationDirection, Problem};
 use nalgebra::{Point3, Vector3};
 
 /// Edges of the linearised friction cone.
@@ -116,58 +117,85 @@ pub fn resisted_force(
     patch_radius: f64,
     direction: &Vector3<f64>,
 ) -> f64 {
-    let Some(d) = direction.try_normalize(1e-12) else {
-        return 0.0;
-    };
+    robustness_program(
+        contacts,
+        centre_of_mass,
+        radius,
+        friction,
+        patch_radius,
+        direction,
+    )
+    .and_then(|lp| lp.maximize())
+    .map_or(0.0, |(value, _)| value.max(0.0))
+}
+
+/// The linear program of [`resisted_force`]: maximise t (variable 0); None without contacts or
+/// a direction.
+fn robustness_program(
+    contacts: &[ContactPoint],
+    centre_of_mass: &Point3<f64>,
+    radius: f64,
+    friction: f64,
+    patch_radius: f64,
+    direction: &Vector3<f64>,
+) -> Option<DenseProgram> {
+    let d = direction.try_normalize(1e-12)?;
     if contacts.is_empty() {
-        return 0.0;
+        return None;
     }
     let rho = radius.max(1e-3);
     let mu = friction.max(0.0);
     let torsion = mu * patch_radius;
-    let mut lp = Problem::new(OptimizationDirection::Maximize);
-    let t = lp.add_var(1.0, (0.0, 1e3));
+    let mut lp = DenseProgram::default();
+    let t = lp.add_var(1.0, 1e3);
+    // Columns first (the program's rows are dense over them): per contact its cone edges, then
+    // its torsion + and −.
+    let firsts: Vec<usize> = contacts
+        .iter()
+        .map(|_| {
+            let first = lp.add_var(0.0, f64::INFINITY);
+            (1..CONE_EDGES + 2).for_each(|_| {
+                lp.add_var(0.0, f64::INFINITY);
+            });
+            first
+        })
+        .collect();
     // Rows of the balance: three forces, three moments (divided by ρ).
-    let mut rows: [Vec<(microlp::Variable, f64)>; 6] = Default::default();
+    let mut rows: [Vec<(usize, f64)>; 6] = Default::default();
     for (k, row) in rows.iter_mut().enumerate().take(3) {
         row.push((t, d[k]));
     }
-    for c in contacts {
+    for (c, &first) in contacts.iter().zip(&firsts) {
         let inward = -c.normal;
         let (t1, t2) = tangents(&inward);
         let r = c.position - centre_of_mass;
-        let mut normal_sum = Vec::with_capacity(CONE_EDGES);
-        for e in 0..CONE_EDGES {
+        let edges: Vec<usize> = (first..first + CONE_EDGES).collect();
+        for (e, &v) in edges.iter().enumerate() {
             let phi = std::f64::consts::TAU * e as f64 / CONE_EDGES as f64;
             let f = inward + mu * (phi.cos() * t1 + phi.sin() * t2);
             let m = r.cross(&f) / rho;
-            let v = lp.add_var(0.0, (0.0, f64::INFINITY));
             for k in 0..3 {
                 rows[k].push((v, f[k]));
                 rows[3 + k].push((v, m[k]));
             }
-            normal_sum.push((v, 1.0));
         }
         // Normal force ≤ 1.
-        lp.add_constraint(normal_sum.as_slice(), ComparisonOp::Le, 1.0);
+        let normal_sum: Vec<(usize, f64)> = edges.iter().map(|&v| (v, 1.0)).collect();
+        lp.add_row(&normal_sum, Row::Le, 1.0);
         // Torsion ±, bounded by μ·r_patch times the normal force.
-        let tp = lp.add_var(0.0, (0.0, f64::INFINITY));
-        let tm = lp.add_var(0.0, (0.0, f64::INFINITY));
+        let (tp, tm) = (first + CONE_EDGES, first + CONE_EDGES + 1);
         for k in 0..3 {
             rows[3 + k].push((tp, inward[k] / rho));
             rows[3 + k].push((tm, -inward[k] / rho));
         }
-        let mut bound: Vec<(microlp::Variable, f64)> = vec![(tp, 1.0), (tm, 1.0)];
-        bound.extend(normal_sum.iter().map(|&(v, _)| (v, -torsion)));
-        lp.add_constraint(bound.as_slice(), ComparisonOp::Le, 0.0);
+        let mut bound: Vec<(usize, f64)> = vec![(tp, 1.0), (tm, 1.0)];
+        bound.extend(edges.iter().map(|&v| (v, -torsion)));
+        lp.add_row(&bound, Row::Le, 0.0);
     }
     for row in &rows {
-        lp.add_constraint(row.as_slice(), ComparisonOp::Eq, 0.0);
+        lp.add_row(row, Row::Eq, 0.0);
     }
-    match lp.solve().map(|o| o.into_solution()) {
-        Ok(Ok(s)) => s.objective().max(0.0),
-        _ => 0.0,
-    }
+    Some(lp)
 }
 
 #[cfg(test)]
@@ -242,5 +270,62 @@ mod tests {
         // Along −y at 5 cm above: the moment 0.05 t about x is held by torsion 2·0.006 f_n.
         assert!(high < 0.25 * centred, "{high} vs {centred}");
         assert!(resisted_force(&[], &com, 0.05, 0.6, 0.01, &Vector3::z()) == 0.0);
+    }
+
+    /// The dense simplex gives microlp's optimum on the robustness programs of random contact
+    /// sets (2–6 contacts, any normals, some pointing the same way so that nothing is resisted,
+    /// any direction): the two solvers agree to 1e-7.
+    #[test]
+    fn the_dense_simplex_agrees_with_microlp_on_random_programs() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(33);
+        let unit = |rng: &mut rand_chacha::ChaCha8Rng| -> Vector3<f64> {
+            loop {
+                let v = Vector3::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                );
+                if let Some(u) = v.try_normalize(0.1) {
+                    return u;
+                }
+            }
+        };
+        let mut positive = 0;
+        for case in 0..400 {
+            let n = rng.random_range(2..=6);
+            let contacts: Vec<ContactPoint> = (0..n)
+                .map(|_| {
+                    let p: Vector3<f64> = unit(&mut rng) * rng.random_range(0.01..0.06);
+                    // Mostly outward-ish normals, as on an object's surface; some at random.
+                    let normal = if rng.random_bool(0.7) {
+                        (p.normalize() + 0.5 * unit(&mut rng)).normalize()
+                    } else {
+                        unit(&mut rng)
+                    };
+                    ContactPoint {
+                        position: Point3::from(p),
+                        normal,
+                    }
+                })
+                .collect();
+            let d = unit(&mut rng);
+            let com = Point3::from(unit(&mut rng) * 0.01);
+            let mu = rng.random_range(0.2..1.0);
+            let program = robustness_program(&contacts, &com, 0.04, mu, 0.01, &d).unwrap();
+            let dense = program
+                .maximize_dense()
+                .expect("the dense simplex solves it");
+            let reference = program.maximize_microlp().expect("microlp solves it");
+            assert!(
+                (dense.0 - reference.0).abs() <= 1e-7 * (1.0 + reference.0.abs()),
+                "case {case}: dense {} microlp {}",
+                dense.0,
+                reference.0
+            );
+            positive += usize::from(reference.0 > 1e-6);
+        }
+        // Both kinds of answer occur: contacts that resist the direction and those that cannot.
+        assert!((100..400).contains(&positive), "{positive}");
     }
 }
