@@ -127,13 +127,19 @@ pub(super) fn candidate_order(
 /// the one whose ends' normals lie closest along it (the most antipodal; the least turned on a
 /// tie) unless the own one is within [`NORMAL_NOISE_DEG`] of it — a box-like body seen turned
 /// from its shoulder (a mustard bottle) is otherwise taken across its corners. None without a
-/// support plane, when the move is under a centimetre, for a line within 30° of the normal, or
-/// when the section has no point on either side of the moved midpoint.
+/// support plane, when the move is under a centimetre (unless a two-finger gripper's own chord
+/// there leaves the friction cones and a turned one is the better), for a line within 30° of the normal, or when the section has no
+/// point on either side of the moved midpoint.
 fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usize, usize)> {
     let up = ctx.plane.as_ref()?.normal;
     let mid = nalgebra::Point3::from((ctx.points[a].coords + ctx.points[b].coords) / 2.0);
     let shift = (ctx.shape.center - mid).dot(&up);
-    if shift.abs() < 0.01 {
+    // A two-finger gripper's opposition already near the centre's height is still turned to
+    // the section's most antipodal chord, if that one is clearly better (a flat box's top
+    // crossed obliquely, its line leaving the friction cones: session 33).
+    let level = shift.abs() < 0.01;
+    let two_jaws = ctx.hand.fingers.len() == 2;
+    if level && !two_jaws {
         return None;
     }
     let raw = ctx.points[b] - ctx.points[a];
@@ -166,7 +172,7 @@ fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usiz
     // A two-finger gripper's jaws take exactly the chord; a hand's fingers curl round the
     // section and find their own contacts, and turned chords held them less often
     // (docs/final-configuration.md, session 32).
-    if ctx.hand.fingers.len() != 2 {
+    if !two_jaws {
         return chord(line);
     }
     // (chord, the larger of its ends' angles to the line), the opposition's own plane first.
@@ -191,11 +197,19 @@ fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usiz
             best = Some(((lo, hi), angle));
         }
     }
+    // Near the centre's height, only a line that leaves the friction cones is turned: on a
+    // round can the turned chords fall short of a diameter, and dropped more often.
+    let cone = ctx.cos_friction.clamp(-1.0, 1.0).acos();
     match (own, best) {
-        (Some((o, a)), Some((_, b))) if b > a - NORMAL_NOISE_DEG.to_radians() => Some(o),
+        (Some((o, a)), Some((_, b)))
+            if b > a - NORMAL_NOISE_DEG.to_radians() || level && a < cone =>
+        {
+            (!level).then_some(o)
+        }
         (_, Some((o, _))) => Some(o),
         // Nothing the jaws span: the opposition's own section (a wider pre-shape may yet take
         // it).
+        _ if level => None,
         _ => chord(line),
     }
 }
@@ -331,6 +345,20 @@ mod tests {
         );
         let width = (pb - pa).norm();
         assert!(width <= ctx.hand.geometry.max_aperture, "{width}");
+        // The same corner crossed at the centre's height: no move, but the chord still turns
+        // to opposite faces.
+        let (a1, b1) = (
+            bx.nearest(Point3::new(-hx, -0.02, zc)),
+            bx.nearest(Point3::new(0.01, hy, zc)),
+        );
+        let (pa, pb) = at_centre_height(&ctx, (a1, b1))
+            .map(|(p, q)| (bx.points[p], bx.points[q]))
+            .expect("a turned chord");
+        assert!(
+            ((pa.x + hx).abs() < 1e-9 && (pb.x - hx).abs() < 1e-9)
+                || ((pa.y + hy).abs() < 1e-9 && (pb.y - hy).abs() < 1e-9),
+            "{pa:?} – {pb:?} not on opposite faces"
+        );
         // A three-finger hand's fingers find their own contacts: its section stays in the
         // opposition's own plane, across the corner.
         let hand = Rod::with_points(points, "barrett", GraspType::Tripod);
