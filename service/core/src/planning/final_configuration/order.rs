@@ -127,16 +127,16 @@ pub(super) fn candidate_order(
 /// the one whose ends' normals lie closest along it (the most antipodal; the least turned on a
 /// tie) unless the own one is within [`NORMAL_NOISE_DEG`] of it — a box-like body seen turned
 /// from its shoulder (a mustard bottle) is otherwise taken across its corners. None without a
-/// support plane, when the move is under a centimetre (unless a two-finger gripper's own chord
-/// there leaves the friction cones and a turned one is the better), for a line within 30° of the normal, or when the section has no
-/// point on either side of the moved midpoint.
+/// support plane, when the move is under a centimetre (unless, for a two-finger gripper, the own
+/// chord there leaves the friction cones and a turned one is the better), for a line within 30°
+/// of the normal, or when the section has no point on either side of the moved midpoint.
 fn at_centre_height(ctx: &SearchContext, (a, b): (usize, usize)) -> Option<(usize, usize)> {
     let up = ctx.plane.as_ref()?.normal;
     let mid = nalgebra::Point3::from((ctx.points[a].coords + ctx.points[b].coords) / 2.0);
     let shift = (ctx.shape.center - mid).dot(&up);
     // A two-finger gripper's opposition already near the centre's height is still turned to
-    // the section's most antipodal chord, if that one is clearly better (a flat box's top
-    // crossed obliquely, its line leaving the friction cones: session 33).
+    // the section's most antipodal chord when its own line leaves the friction cones and that
+    // chord is clearly better (a flat box's top crossed obliquely: session 33).
     let level = shift.abs() < 0.01;
     let two_jaws = ctx.hand.fingers.len() == 2;
     if level && !two_jaws {
