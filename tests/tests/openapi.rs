@@ -14,6 +14,7 @@ const ROUTES: &[(&str, &str)] = &[
     ("GET", "/v1/hands"),
     ("POST", "/v1/hands"),
     ("GET", "/v1/hands/{name}"),
+    ("GET", "/v1/hands/{name}/synergies"),
     ("GET", "/v1/stabilize"),
     ("POST", "/v1/tactile/analyze"),
     ("GET", "/v1/tactile/calibrations"),

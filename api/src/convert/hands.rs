@@ -1,10 +1,43 @@
-//! Hand descriptions and RegisterHand requests and responses.
+//! Hand descriptions, RegisterHand requests and responses, and a hand's posture synergies.
 
 use super::values::*;
-use crate::request::{Asset, HandUpload, ModelFormat, RegisteredHand, StoredOverrides};
+use crate::request::{
+    Asset, HandSynergies, HandUpload, ModelFormat, RegisteredHand, StoredOverrides,
+};
 use graspd_core::hand::{Finger, GraspRealisation, HandGeometry, TypeEquivalence};
 use graspd_core::{FieldError, HandDescription};
 use graspd_proto::v1 as pb;
+
+/// GetHandSynergies' answer.
+pub fn synergies_to_proto(h: &HandSynergies) -> pb::HandSynergies {
+    let s = &h.synergies;
+    pb::HandSynergies {
+        hand: h.hand.clone(),
+        joints: s.joints.clone(),
+        mean: s.mean.clone(),
+        components: s
+            .components
+            .iter()
+            .map(|c| pb::SynergyComponent {
+                direction: c.direction.clone(),
+                variance: c.variance,
+                explained: c.explained,
+            })
+            .collect(),
+        centres: s
+            .centres
+            .iter()
+            .map(|c| pb::SynergyCentre {
+                grasp_type: grasp_type_to_proto(c.grasp_type) as i32,
+                postures: c.postures as u32,
+                amplitudes: c.amplitudes.clone(),
+            })
+            .collect(),
+        postures: s.postures as u32,
+        plans: h.plans as u32,
+        seed: h.seed,
+    }
+}
 
 pub fn hand_to_proto(h: &HandDescription) -> pb::HandDescription {
     let g = &h.geometry;

@@ -1,7 +1,8 @@
-//! `GET /v1/hands`, `GET /v1/hands/{name}` and `POST /v1/hands` (registration).
+//! `GET /v1/hands`, `GET /v1/hands/{name}`, `GET /v1/hands/{name}/synergies` and
+//! `POST /v1/hands` (registration).
 
-use crate::request::RegisteredHand;
 use crate::request::{Asset, HandUpload, ModelFormat, StoredOverrides};
+use crate::request::{HandSynergies, RegisteredHand};
 use crate::schemas::{GraspTypeDoc, HandDescriptionDoc};
 use base64::Engine;
 use graspd_core::{FieldError, GraspType, HandDescription};
@@ -29,6 +30,81 @@ impl From<HandDescription> for HandJson {
         Self {
             realisable_types: hand.realisable_types(),
             hand,
+        }
+    }
+}
+
+/// One principal component eᵢ of a hand's postures (Eq 7.3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct SynergyComponentJson {
+    /// Unit vector over `joints` (its largest entry positive).
+    pub direction: Vec<f64>,
+    /// Variance of the postures along it, rad².
+    pub variance: f64,
+    /// Its share of the total variance.
+    pub explained: f64,
+}
+
+/// One grasp type's cluster centre in the posture space (the dissertation's Fig 7.3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct SynergyCentreJson {
+    #[schema(value_type = GraspTypeDoc)]
+    pub grasp_type: GraspType,
+    /// Postures of this type.
+    pub postures: usize,
+    /// Mean amplitude on each component; the first two are A_center of Eq 7.5.
+    pub amplitudes: Vec<f64>,
+}
+
+/// `GET /v1/hands/{name}/synergies`: a hand's posture synergies (dissertation §7.3). A
+/// posture c (joint angles in `joints`' order, rad) is c = mean + Σ aᵢ componentsᵢ.direction.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct HandSynergiesJson {
+    pub hand: String,
+    /// The model's joints, the order of every vector here.
+    pub joints: Vec<String>,
+    /// The nominal posture c_m (the postures' mean), rad.
+    pub mean: Vec<f64>,
+    /// In order of falling variance; components without variance are left out.
+    pub components: Vec<SynergyComponentJson>,
+    /// Per grasp type present, in the dissertation's order.
+    pub centres: Vec<SynergyCentreJson>,
+    /// Postures fitted: the feasible plans among `plans`.
+    pub postures: usize,
+    /// Plans made: each generated object once per type the hand realises.
+    pub plans: usize,
+    /// The planner's seed.
+    pub seed: u64,
+}
+
+impl From<&HandSynergies> for HandSynergiesJson {
+    fn from(h: &HandSynergies) -> Self {
+        let s = &h.synergies;
+        Self {
+            hand: h.hand.clone(),
+            joints: s.joints.clone(),
+            mean: s.mean.clone(),
+            components: s
+                .components
+                .iter()
+                .map(|c| SynergyComponentJson {
+                    direction: c.direction.clone(),
+                    variance: c.variance,
+                    explained: c.explained,
+                })
+                .collect(),
+            centres: s
+                .centres
+                .iter()
+                .map(|c| SynergyCentreJson {
+                    grasp_type: c.grasp_type,
+                    postures: c.postures,
+                    amplitudes: c.amplitudes.clone(),
+                })
+                .collect(),
+            postures: s.postures,
+            plans: h.plans,
+            seed: h.seed,
         }
     }
 }

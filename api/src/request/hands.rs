@@ -1,5 +1,6 @@
 //! A hand registration in domain terms, as both transports decode it, with the registration
-//! rules they share ([`HandUpload::from_request`], [`check_name`]), and the answer to it.
+//! rules they share ([`HandUpload::from_request`], [`check_name`]), and the answer to it; and a
+//! hand's posture synergies as served.
 
 use graspd_core::{FieldError, HandDescription};
 use serde::{Deserialize, Serialize};
@@ -149,4 +150,16 @@ pub struct RegisteredHand {
     pub joints: Vec<String>,
     /// Stored in the hands directory (else in memory only).
     pub persisted: bool,
+}
+
+/// A hand's posture synergies (`GET /v1/hands/{name}/synergies`, gRPC `GetHandSynergies`;
+/// dissertation §7.3): the posture space fitted to graspd's own plans for the hand.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HandSynergies {
+    pub hand: String,
+    pub synergies: graspd_core::hand::PostureSynergies,
+    /// Plans made for it (feasible ones gave the postures: `synergies.postures`).
+    pub plans: usize,
+    /// The planner's seed.
+    pub seed: u64,
 }

@@ -61,6 +61,14 @@ def test_lists_and_gets_the_built_in_hands(server):
         with pytest.raises(grpc.RpcError) as e:
             c.get_hand("nope")
         assert e.value.code() == grpc.StatusCode.NOT_FOUND
+        # The built-in hands have no joints, so no posture synergies.
+        with pytest.raises(grpc.RpcError) as e:
+            c.hand_synergies("shadow")
+        assert e.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+        assert field_of(e.value) == "name"
+        with pytest.raises(grpc.RpcError) as e:
+            c.hand_synergies("nope")
+        assert e.value.code() == grpc.StatusCode.NOT_FOUND
 
 
 @pytest.mark.parametrize(

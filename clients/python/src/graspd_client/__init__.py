@@ -363,6 +363,13 @@ class Client:
     def get_hand(self, name: str) -> hand_pb2.HandDescription:
         return self._planner.GetHand(hand_pb2.GetHandRequest(name=name), timeout=self.timeout).hand
 
+    def hand_synergies(self, name: str) -> hand_pb2.HandSynergies:
+        """A hand's posture synergies (dissertation 7.3; hands with kinematics only): the mean
+        posture, the principal components and each grasp type's centre. The first call for a
+        hand fits them (seconds); give the client a timeout that allows it."""
+        return self._planner.GetHandSynergies(hand_pb2.GetHandSynergiesRequest(name=name),
+                                              timeout=self.timeout)
+
     def plan(self, request: plan_pb2.PlanGraspRequest) -> plan_pb2.PlanGraspResponse:
         return self._planner.PlanGrasp(request, timeout=self.timeout)
 

@@ -26,6 +26,7 @@ pub mod request;
 pub mod robustness;
 mod scene;
 pub mod slot_set;
+pub mod synergy_postures;
 #[cfg(test)]
 mod test_scene;
 pub mod type_choice;

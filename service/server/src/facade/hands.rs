@@ -3,11 +3,18 @@
 use super::validate::rename_hand_field;
 use super::{GraspService, HandChoice, Hands, ServiceError, guarded};
 use crate::hand_store::{self, HandUpload};
+use graspd_api::request::HandSynergies;
 pub use graspd_api::request::RegisteredHand;
+use graspd_core::hand::PostureSynergies;
 use graspd_core::planning::KinematicModel;
+use graspd_core::planning::synergy_postures::synergy_postures;
 use graspd_core::{FieldError, HandDescription};
 use std::path::PathBuf;
 use std::sync::Arc;
+
+/// The planner's seed for the postures a hand's synergies are fitted to: one fixed seed, so that
+/// a hand has one answer.
+pub const SYNERGY_SEED: u64 = 0;
 
 /// Hands to load at start (configuration).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -130,6 +137,62 @@ impl GraspService {
         hands.catalog.insert(staged.description)?;
         hands.models.insert(upload.name.clone(), staged.model);
         Ok(registered)
+    }
+
+    /// A hand's posture synergies (issue 19, dissertation §7.3): fitted on the first request to
+    /// the planner's own grasp postures for the hand over generated objects
+    /// (`planning::synergy_postures`; about 2 s for the Shadow on one core) and kept until the
+    /// hand is replaced. Needs the hand's kinematics: a built-in or described hand has no joints.
+    /// Blocking: async callers run it on a blocking thread.
+    pub fn hand_synergies(&self, name: &str) -> Result<Arc<HandSynergies>, ServiceError> {
+        let (model, cached) = {
+            let hands = self.hands();
+            let model = hands.models.get(name).cloned();
+            let cached = hands
+                .synergies
+                .get(name)
+                .filter(|(m, _)| model.as_ref().is_some_and(|x| Arc::ptr_eq(x, m)))
+                .map(|(_, s)| s.clone());
+            (model, cached)
+        };
+        if let Some(s) = cached {
+            return Ok(s);
+        }
+        let Some(model) = model else {
+            self.get_hand(name, "name")?;
+            return Err(ServiceError::InvalidArgument(FieldError::new(
+                "name",
+                format!(
+                    "hand '{}' has no kinematics: synergies are a PCA of joint postures, and a built-in or described hand has no joints (register its MJCF or URDF with POST /v1/hands)",
+                    name.escape_debug()
+                ),
+            )));
+        };
+        let fitted = guarded("fitting the posture synergies", || {
+            let (joints, postures, plans) = synergy_postures(&model, SYNERGY_SEED)?;
+            let synergies = PostureSynergies::fit(joints, &postures).map_err(|e| {
+                ServiceError::InvalidArgument(FieldError::new(
+                    "name",
+                    format!(
+                        "{} of {plans} plans for hand '{}' were feasible, too few for its posture space ({})",
+                        postures.len(),
+                        name.escape_debug(),
+                        e.message
+                    ),
+                ))
+            })?;
+            Ok(HandSynergies {
+                hand: name.to_string(),
+                synergies,
+                plans,
+                seed: SYNERGY_SEED,
+            })
+        })?;
+        let fitted = Arc::new(fitted);
+        self.hands_mut()
+            .synergies
+            .insert(name.to_string(), (model, fitted.clone()));
+        Ok(fitted)
     }
 
     /// The hand of a request and its kinematics, when known.

@@ -34,7 +34,9 @@ pub use graspd_api::limits::{
     DEFAULT_MAX_ITERATIONS, DEFAULT_MAX_TACTILE_SESSIONS, DEFAULT_MAX_VIEWS, Limits,
     QUEUED_PLANS_PER_PLANNER,
 };
-pub use graspd_api::request::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
+pub use graspd_api::request::{
+    HandChoice, HandSynergies, ImageHints, OutputOptions, PlanRequest, PlanSource,
+};
 pub use hands::{HandSetup, RegisteredHand};
 pub use tactile::{LayoutChoice, TactileFingerRequest, TactileSession, TactileSessionRequest};
 
@@ -73,6 +75,9 @@ struct Hands {
     /// Names of hands registered at run time (in `dir`): the ones `replace` may replace.
     registered: BTreeSet<String>,
     dir: Option<PathBuf>,
+    /// Posture synergies fitted so far, with the model each was fitted to (a replaced hand's
+    /// model is another, so its old synergies are not served).
+    synergies: BTreeMap<String, (Arc<KinematicModel>, Arc<HandSynergies>)>,
 }
 
 impl GraspService {

@@ -65,6 +65,21 @@ impl GraspPlanner for GraspPlannerService {
         }))
     }
 
+    async fn get_hand_synergies(
+        &self,
+        request: Request<pb::GetHandSynergiesRequest>,
+    ) -> Result<Response<pb::HandSynergies>, Status> {
+        let name = request.into_inner().name;
+        let synergies = self
+            .runner
+            .run_blocking("posture synergies", Transport::Grpc, move |s| {
+                s.hand_synergies(&name)
+            })
+            .await
+            .map_err(to_status)?;
+        Ok(Response::new(convert::synergies_to_proto(&synergies)))
+    }
+
     async fn register_hand(
         &self,
         request: Request<pb::RegisterHandRequest>,

@@ -21,6 +21,7 @@ pub const METHODS: &[&str] = &[
     "/graspd.v1.GraspPlanner/PlanGrasp",
     "/graspd.v1.GraspPlanner/ListHands",
     "/graspd.v1.GraspPlanner/GetHand",
+    "/graspd.v1.GraspPlanner/GetHandSynergies",
     "/graspd.v1.GraspPlanner/RegisterHand",
     "/graspd.v1.GraspPlanner/PlanReach",
     "/graspd.v1.TactileStabilizer/Stabilize",

@@ -2,7 +2,9 @@
 
 use super::body::{Body, Part, read_body};
 use super::error::ApiError;
-use super::json::{self, ErrorJson, HandJson, HandsJson, RegisterHandJson, RegisteredHandJson};
+use super::json::{
+    self, ErrorJson, HandJson, HandSynergiesJson, HandsJson, RegisterHandJson, RegisteredHandJson,
+};
 use crate::hand_store::{Asset, HandUpload, ModelFormat, StoredOverrides};
 use crate::ops::Transport;
 use crate::runner::PlanRunner;
@@ -45,6 +47,32 @@ pub async fn get(
 ) -> Result<Json<HandJson>, ApiError> {
     let hand = runner.service().get_hand(&name, "name")?;
     Ok(Json(hand.into()))
+}
+
+#[utoipa::path(
+    get,
+    path = "/v1/hands/{name}/synergies",
+    tag = "hands",
+    summary = "A hand's posture synergies (dissertation §7.3)",
+    description = "The principal components of the hand's grasp postures (Eq 7.3) and each grasp type's centre among them, fitted on the first request to graspd's own plans for the hand over generated objects (about 2 s for a five-finger hand) and kept until the hand is replaced. Only for hands with kinematics (imported or registered from MJCF or URDF).",
+    params(("name" = String, Path, description = "The hand's name")),
+    responses(
+        (status = 200, description = "The posture space", body = HandSynergiesJson),
+        (status = 400, description = "The hand has no kinematics, or too few of its plans were feasible", body = ErrorJson),
+        (status = 401, description = "Missing or wrong bearer token (only when tokens are configured)", body = ErrorJson),
+        (status = 404, description = "No hand of that name", body = ErrorJson),
+    )
+)]
+pub async fn synergies(
+    State(runner): State<PlanRunner>,
+    Path(name): Path<String>,
+) -> Result<Json<HandSynergiesJson>, ApiError> {
+    let synergies = runner
+        .run_blocking("posture synergies", Transport::Rest, move |s| {
+            s.hand_synergies(&name)
+        })
+        .await?;
+    Ok(Json(synergies.as_ref().into()))
 }
 
 /// `POST /v1/hands`: registers a hand from its MJCF or URDF document and files, as JSON

@@ -56,6 +56,7 @@ pub fn router(runner: PlanRunner, ops: Ops) -> Router {
         .route("/v1/reach", post(reach::reach))
         .route("/v1/hands", get(hands::list).post(hands::register))
         .route("/v1/hands/{name}", get(hands::get))
+        .route("/v1/hands/{name}/synergies", get(hands::synergies))
         .route("/v1/stabilize", get(stabilize::stabilize))
         .route("/v1/tactile/analyze", post(tactile::analyze))
         .route(

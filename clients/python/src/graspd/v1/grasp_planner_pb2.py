@@ -27,7 +27,7 @@ from graspd.v1 import plan_pb2 as graspd_dot_v1_dot_plan__pb2
 from graspd.v1 import reach_pb2 as graspd_dot_v1_dot_reach__pb2
 
 
-DESCRIPTOR = _descriptor_pool.Default().AddSerializedFile(b'\n\x1dgraspd/v1/grasp_planner.proto\x12\tgraspd.v1\x1a\x14graspd/v1/hand.proto\x1a\x14graspd/v1/plan.proto\x1a\x15graspd/v1/reach.proto2\xf9\x02\n\x0cGraspPlanner\x12\x46\n\tPlanGrasp\x12\x1b.graspd.v1.PlanGraspRequest\x1a\x1c.graspd.v1.PlanGraspResponse\x12\x46\n\tListHands\x12\x1b.graspd.v1.ListHandsRequest\x1a\x1c.graspd.v1.ListHandsResponse\x12@\n\x07GetHand\x12\x19.graspd.v1.GetHandRequest\x1a\x1a.graspd.v1.GetHandResponse\x12O\n\x0cRegisterHand\x12\x1e.graspd.v1.RegisterHandRequest\x1a\x1f.graspd.v1.RegisterHandResponse\x12\x46\n\tPlanReach\x12\x1b.graspd.v1.PlanReachRequest\x1a\x1c.graspd.v1.PlanReachResponseb\x06proto3')
+DESCRIPTOR = _descriptor_pool.Default().AddSerializedFile(b'\n\x1dgraspd/v1/grasp_planner.proto\x12\tgraspd.v1\x1a\x14graspd/v1/hand.proto\x1a\x14graspd/v1/plan.proto\x1a\x15graspd/v1/reach.proto2\xcb\x03\n\x0cGraspPlanner\x12\x46\n\tPlanGrasp\x12\x1b.graspd.v1.PlanGraspRequest\x1a\x1c.graspd.v1.PlanGraspResponse\x12\x46\n\tListHands\x12\x1b.graspd.v1.ListHandsRequest\x1a\x1c.graspd.v1.ListHandsResponse\x12@\n\x07GetHand\x12\x19.graspd.v1.GetHandRequest\x1a\x1a.graspd.v1.GetHandResponse\x12O\n\x0cRegisterHand\x12\x1e.graspd.v1.RegisterHandRequest\x1a\x1f.graspd.v1.RegisterHandResponse\x12P\n\x10GetHandSynergies\x12\".graspd.v1.GetHandSynergiesRequest\x1a\x18.graspd.v1.HandSynergies\x12\x46\n\tPlanReach\x12\x1b.graspd.v1.PlanReachRequest\x1a\x1c.graspd.v1.PlanReachResponseb\x06proto3')
 
 _globals = globals()
 _builder.BuildMessageAndEnumDescriptors(DESCRIPTOR, _globals)
@@ -35,5 +35,5 @@ _builder.BuildTopDescriptorsAndMessages(DESCRIPTOR, 'graspd.v1.grasp_planner_pb2
 if not _descriptor._USE_C_DESCRIPTORS:
   DESCRIPTOR._loaded_options = None
   _globals['_GRASPPLANNER']._serialized_start=112
-  _globals['_GRASPPLANNER']._serialized_end=489
+  _globals['_GRASPPLANNER']._serialized_end=571
 # @@protoc_insertion_point(module_scope)

@@ -56,6 +56,11 @@ class GraspPlannerStub:
                 request_serializer=graspd_dot_v1_dot_hand__pb2.RegisterHandRequest.SerializeToString,
                 response_deserializer=graspd_dot_v1_dot_hand__pb2.RegisterHandResponse.FromString,
                 _registered_method=True)
+        self.GetHandSynergies = channel.unary_unary(
+                '/graspd.v1.GraspPlanner/GetHandSynergies',
+                request_serializer=graspd_dot_v1_dot_hand__pb2.GetHandSynergiesRequest.SerializeToString,
+                response_deserializer=graspd_dot_v1_dot_hand__pb2.HandSynergies.FromString,
+                _registered_method=True)
         self.PlanReach = channel.unary_unary(
                 '/graspd.v1.GraspPlanner/PlanReach',
                 request_serializer=graspd_dot_v1_dot_reach__pb2.PlanReachRequest.SerializeToString,
@@ -94,6 +99,15 @@ class GraspPlannerServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def GetHandSynergies(self, request, context):
+        """A hand's posture synergies (dissertation §7.3): the principal components of its grasp
+        postures. Fitted on the first call (seconds), then kept. NOT_FOUND for an unknown hand,
+        INVALID_ARGUMENT for a hand without kinematics.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
     def PlanReach(self, request, context):
         """A reaching trajectory from the hand's pose to a grasp, clear of obstacles and the table.
         """
@@ -123,6 +137,11 @@ def add_GraspPlannerServicer_to_server(servicer, server):
                     servicer.RegisterHand,
                     request_deserializer=graspd_dot_v1_dot_hand__pb2.RegisterHandRequest.FromString,
                     response_serializer=graspd_dot_v1_dot_hand__pb2.RegisterHandResponse.SerializeToString,
+            ),
+            'GetHandSynergies': grpc.unary_unary_rpc_method_handler(
+                    servicer.GetHandSynergies,
+                    request_deserializer=graspd_dot_v1_dot_hand__pb2.GetHandSynergiesRequest.FromString,
+                    response_serializer=graspd_dot_v1_dot_hand__pb2.HandSynergies.SerializeToString,
             ),
             'PlanReach': grpc.unary_unary_rpc_method_handler(
                     servicer.PlanReach,
@@ -238,6 +257,33 @@ class GraspPlanner:
             '/graspd.v1.GraspPlanner/RegisterHand',
             graspd_dot_v1_dot_hand__pb2.RegisterHandRequest.SerializeToString,
             graspd_dot_v1_dot_hand__pb2.RegisterHandResponse.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def GetHandSynergies(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/graspd.v1.GraspPlanner/GetHandSynergies',
+            graspd_dot_v1_dot_hand__pb2.GetHandSynergiesRequest.SerializeToString,
+            graspd_dot_v1_dot_hand__pb2.HandSynergies.FromString,
             options,
             channel_credentials,
             insecure,
