@@ -46,6 +46,37 @@ fn hands_lists_and_shows() {
     assert!(text(&out.stderr).contains("unknown hand 'nope'"));
 }
 
+/// `hands NAME --synergies`: an imported hand's posture synergies as a summary and as JSON; a
+/// built-in hand (no joints) is refused naming why.
+#[test]
+fn hands_show_the_posture_synergies() {
+    let gripper = graspd_testkit::testdata_dir().join("hands/robotiq_2f85/2f85.xml");
+    let import = format!("robotiq_2f85={}", gripper.display());
+    let server = Server::start_with(&["--import-hand", &import]);
+    let out = graspctl(&server, &["hands", "robotiq_2f85", "--synergies"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("hand            robotiq_2f85"), "{stdout}");
+    assert!(stdout.contains("  e1 "), "{stdout}");
+    assert!(stdout.contains("  pinch "), "{stdout}");
+    let out = graspctl(&server, &["--json", "hands", "robotiq_2f85", "--synergies"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let joints = json["joints"].as_array().unwrap().len();
+    assert_eq!(json["mean"].as_array().unwrap().len(), joints);
+    let e1 = &json["components"][0];
+    assert_eq!(e1["direction"].as_array().unwrap().len(), joints);
+    assert!(e1["explained"].as_f64().unwrap() > 0.9, "{e1}");
+    assert_eq!(json["centres"][0]["grasp_type"], "pinch");
+    let out = graspctl(&server, &["hands", "shadow", "--synergies"]);
+    assert!(!out.status.success());
+    assert!(
+        text(&out.stderr).contains("no kinematics"),
+        "{}",
+        text(&out.stderr)
+    );
+}
+
 #[test]
 fn plan_prints_a_summary_and_json() {
     let server = Server::start();

@@ -4,7 +4,10 @@ use super::values::*;
 use crate::request::{
     Asset, HandSynergies, HandUpload, ModelFormat, RegisteredHand, StoredOverrides,
 };
-use graspd_core::hand::{Finger, GraspRealisation, HandGeometry, TypeEquivalence};
+use graspd_core::hand::posture_synergies::{SynergyComponent, TypeCentre};
+use graspd_core::hand::{
+    Finger, GraspRealisation, HandGeometry, PostureSynergies, TypeEquivalence,
+};
 use graspd_core::{FieldError, HandDescription};
 use graspd_proto::v1 as pb;
 
@@ -37,6 +40,66 @@ pub fn synergies_to_proto(h: &HandSynergies) -> pb::HandSynergies {
         plans: h.plans as u32,
         seed: h.seed,
     }
+}
+
+/// GetHandSynergies' answer as a client reads it; `field` names it in errors.
+pub fn synergies_from_proto(
+    h: pb::HandSynergies,
+    field: &str,
+) -> Result<HandSynergies, FieldError> {
+    let d = h.joints.len();
+    let wrong = |what: String| FieldError::new(field, what);
+    if h.mean.len() != d {
+        return Err(wrong(format!(
+            "mean has {} values for {d} joints",
+            h.mean.len()
+        )));
+    }
+    let components = h
+        .components
+        .into_iter()
+        .enumerate()
+        .map(|(i, c)| {
+            if c.direction.len() != d {
+                return Err(wrong(format!(
+                    "components[{i}].direction has {} values for {d} joints",
+                    c.direction.len()
+                )));
+            }
+            Ok(SynergyComponent {
+                direction: c.direction,
+                variance: c.variance,
+                explained: c.explained,
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let centres = h
+        .centres
+        .into_iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let at = format!("{field}.centres[{i}].grasp_type");
+            let grasp_type = grasp_type_from_proto(c.grasp_type, &at)?
+                .ok_or_else(|| FieldError::new(at, "missing"))?;
+            Ok(TypeCentre {
+                grasp_type,
+                postures: c.postures as usize,
+                amplitudes: c.amplitudes,
+            })
+        })
+        .collect::<Result<Vec<_>, FieldError>>()?;
+    Ok(HandSynergies {
+        hand: h.hand,
+        synergies: PostureSynergies {
+            joints: h.joints,
+            mean: h.mean,
+            components,
+            centres,
+            postures: h.postures as usize,
+        },
+        plans: h.plans as usize,
+        seed: h.seed,
+    })
 }
 
 pub fn hand_to_proto(h: &HandDescription) -> pb::HandDescription {

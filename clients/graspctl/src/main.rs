@@ -7,7 +7,7 @@ mod summary;
 
 use clap::{Args, Parser, Subcommand};
 use graspd_api::convert;
-use graspd_api::json::{HandJson, HandsJson, PlanResponseJson};
+use graspd_api::json::{HandJson, HandSynergiesJson, HandsJson, PlanResponseJson};
 use graspd_api::request::{HandChoice, ImageHints, OutputOptions, PlanRequest, PlanSource};
 use graspd_core::cloud::Plane;
 use graspd_core::cloud::io::read_cloud_file;
@@ -61,6 +61,10 @@ enum Command {
     Hands {
         /// Show this hand in detail.
         name: Option<String>,
+        /// Show the hand's posture synergies instead (dissertation §7.3; a hand with
+        /// kinematics; the server fits them on the first request, in seconds).
+        #[arg(long, requires = "name")]
+        synergies: bool,
     },
     /// Replay a BioTac recording (CSV) through the tactile stabilization stream: a live view,
     /// then a summary (with --json: one setpoint per line on stdout, the summary on stderr).
@@ -403,7 +407,7 @@ async fn run(cli: Cli) -> Result<(), CliError> {
                 print!("{}", summary::plan(&plan));
             }
         }
-        Command::Hands { name: None } => {
+        Command::Hands { name: None, .. } => {
             let mut client = connect(&cli.server, cli.token.as_deref()).await?;
             let response = client
                 .list_hands(pb::ListHandsRequest {})
@@ -421,7 +425,29 @@ async fn run(cli: Cli) -> Result<(), CliError> {
                 print!("{}", summary::hands(&hands));
             }
         }
-        Command::Hands { name: Some(name) } => {
+        Command::Hands {
+            name: Some(name),
+            synergies: true,
+        } => {
+            let mut client = connect(&cli.server, cli.token.as_deref()).await?;
+            let response = client
+                .get_hand_synergies(pb::GetHandSynergiesRequest { name: name.clone() })
+                .await?
+                .into_inner();
+            let synergies =
+                convert::synergies_from_proto(response, "synergies").map_err(CliError::Answer)?;
+            if cli.json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&HandSynergiesJson::from(&synergies))?
+                );
+            } else {
+                print!("{}", summary::synergies(&synergies));
+            }
+        }
+        Command::Hands {
+            name: Some(name), ..
+        } => {
             let mut client = connect(&cli.server, cli.token.as_deref()).await?;
             let response = client
                 .get_hand(pb::GetHandRequest { name: name.clone() })

@@ -1,6 +1,7 @@
 //! Human-readable summaries of plans and hands.
 
 use graspd_api::convert::{plane_source_name, type_source_name};
+use graspd_api::request::HandSynergies;
 use graspd_core::planning::{Pose, StageStats};
 use graspd_core::{GraspPlan, GraspType, HandDescription};
 use nalgebra::{Point3, Vector3};
@@ -271,6 +272,54 @@ pub fn hand(h: &HandDescription) -> String {
             "  {:<11} same as {}",
             e.grasp_type.name(),
             e.same_as.name()
+        );
+    }
+    s
+}
+
+/// A hand's posture synergies: the fit, the first components' shares and largest joints, and
+/// each grasp type's centre on (a₁, a₂).
+pub fn synergies(h: &HandSynergies) -> String {
+    let mut s = String::new();
+    let w = &mut s;
+    let sy = &h.synergies;
+    let _ = writeln!(w, "hand            {}", h.hand);
+    let _ = writeln!(
+        w,
+        "postures        {} feasible of {} plans (seed {}), {} joints, {} components",
+        sy.postures,
+        h.plans,
+        h.seed,
+        sy.joints.len(),
+        sy.components.len()
+    );
+    let _ = writeln!(w, "components      share  largest joints");
+    for (i, c) in sy.components.iter().take(4).enumerate() {
+        let mut order: Vec<usize> = (0..c.direction.len()).collect();
+        order.sort_by(|&a, &b| c.direction[b].abs().total_cmp(&c.direction[a].abs()));
+        let joints: Vec<String> = order
+            .iter()
+            .take(3)
+            .map(|&j| format!("{} {:+.2}", sy.joints[j], c.direction[j]))
+            .collect();
+        let _ = writeln!(
+            w,
+            "  e{}           {:5.1} %  {}",
+            i + 1,
+            100.0 * c.explained,
+            joints.join(", ")
+        );
+    }
+    let _ = writeln!(w, "centres         postures  (a1, a2)");
+    for c in &sy.centres {
+        let a = |k: usize| c.amplitudes.get(k).copied().unwrap_or(0.0);
+        let _ = writeln!(
+            w,
+            "  {:<13} {:>8}  ({:+.3}, {:+.3})",
+            c.grasp_type.name(),
+            c.postures,
+            a(0),
+            a(1)
         );
     }
     s
