@@ -180,6 +180,27 @@ async fn grpc_registered_hand_plans_and_survives_a_restart() {
     check_joints(&plan, &joints);
     assert_eq!(plan.joints, first_plan.joints);
     assert_eq!(plan.contacts, first_plan.contacts);
+
+    // Posture synergies follow the hand: fitted for the 2F-85, fitted again for the hand that
+    // replaces it under the same name (not the kept ones).
+    let mut grpc = server.grpc().await;
+    let synergies = |name: &str| pb::GetHandSynergiesRequest { name: name.into() };
+    let first = grpc
+        .get_hand_synergies(synergies("gripper_2f85"))
+        .await
+        .unwrap()
+        .into_inner();
+    assert_eq!(first.joints, joints);
+    let mut replace = register("gripper_2f85", allegro());
+    replace.replace = true;
+    let replaced = grpc.register_hand(replace).await.unwrap().into_inner();
+    let second = grpc
+        .get_hand_synergies(synergies("gripper_2f85"))
+        .await
+        .unwrap()
+        .into_inner();
+    assert_eq!(second.joints, replaced.joints);
+    assert_eq!(second.joints.len(), 16, "{:?}", second.joints);
     drop(server);
     std::fs::remove_dir_all(&dir).unwrap();
 }
