@@ -1,6 +1,6 @@
 //! The grasp postures a hand's posture synergies are fitted to (dissertation §7.3): graspd's own
 //! plans for the hand, with its kinematics, over a fixed set of generated objects — spheres,
-//! upright cylinders and boxes from 4 to 15 cm on a table — once per grasp type the hand
+//! upright cylinders and boxes from 3 to 15 cm on a table — once per grasp type the hand
 //! realises. The dissertation mapped recorded human grasps onto the Shadow hand; planning
 //! instead works for any hand graspd can import. Each object is a whole surface with exact
 //! outward normals (nothing to complete), and a feasible plan's touching joints are one posture
