@@ -1,7 +1,8 @@
 //! A hand's posture synergies over both transports (issue 19 part 1): the real binary, a shared
 //! MJCF hand imported at start, `GET /v1/hands/{name}/synergies` and `GetHandSynergies` give the
 //! same posture space, a unit, ordered, reconstructing one over the model's joints; a hand
-//! without kinematics and an unknown hand are refused naming `name`, and the server goes on.
+//! without kinematics and an unknown hand are refused naming `name`, and the server goes on;
+//! asked again, the hand has the same space.
 
 use graspd_core::hand::kinematics::KinematicHand;
 use graspd_e2e::{Server, http, refused_naming, rest_error};
@@ -134,7 +135,8 @@ async fn synergies_of_an_imported_hand_agree_over_grpc_and_rest() {
         .unwrap_err();
     assert_eq!(e.code(), Code::NotFound, "{e}");
 
-    // Kept: the same answer again.
+    // One answer per hand: the same again (kept; that a replaced hand's are fitted anew is
+    // register_hand.rs's test).
     let again = grpc
         .get_hand_synergies(pb::GetHandSynergiesRequest {
             name: HAND.0.into(),

@@ -42,8 +42,9 @@ fn the_shadow_hands_synergies_span_its_planned_postures() {
     assert_eq!(plans, OBJECTS.len() * types.len());
     // Every joint of the model, named once.
     assert_eq!(names.len(), m.hand.tree.joints.len());
+    // 27 of 54 today; at least 40 %.
     assert!(
-        postures.len() * 2 >= plans,
+        postures.len() * 5 >= plans * 2,
         "{} feasible of {plans}",
         postures.len()
     );

@@ -163,7 +163,13 @@ pub fn synergy_postures(
     seed: u64,
 ) -> Result<(Vec<String>, Vec<LabelledPosture>, usize), PlanError> {
     let hand = model.describe()?;
-    let mut names: Vec<String> = Vec::new();
+    let names: Vec<String> = model
+        .hand
+        .tree
+        .joints
+        .iter()
+        .map(|j| j.name.clone())
+        .collect();
     let mut postures = Vec::new();
     let mut plans = 0;
     for object in OBJECTS {
@@ -202,9 +208,6 @@ pub fn synergy_postures(
             );
             if !p.feasible || p.joints.is_empty() {
                 continue;
-            }
-            if names.is_empty() {
-                names = p.joints.iter().map(|(n, _)| n.clone()).collect();
             }
             postures.push(LabelledPosture {
                 joints: p.joints.iter().map(|(_, v)| *v).collect(),

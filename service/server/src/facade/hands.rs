@@ -141,7 +141,7 @@ impl GraspService {
 
     /// A hand's posture synergies (issue 19, dissertation §7.3): fitted on the first request to
     /// the planner's own grasp postures for the hand over generated objects
-    /// (`planning::synergy_postures`; about 2 s for the Shadow on one core) and kept until the
+    /// (`planning::synergy_postures`; 2.5 s for the Shadow on one core, release) and kept until the
     /// hand is replaced. Needs the hand's kinematics: a built-in or described hand has no joints.
     /// Blocking: async callers run it on a blocking thread.
     pub fn hand_synergies(&self, name: &str) -> Result<Arc<HandSynergies>, ServiceError> {

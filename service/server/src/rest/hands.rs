@@ -54,7 +54,7 @@ pub async fn get(
     path = "/v1/hands/{name}/synergies",
     tag = "hands",
     summary = "A hand's posture synergies (dissertation §7.3)",
-    description = "The principal components of the hand's grasp postures (Eq 7.3) and each grasp type's centre among them, fitted on the first request to graspd's own plans for the hand over generated objects (about 2 s for a five-finger hand) and kept until the hand is replaced. Only for hands with kinematics (imported or registered from MJCF or URDF).",
+    description = "The principal components of the hand's grasp postures (Eq 7.3) and each grasp type's centre among them, fitted on the first request to graspd's own plans for the hand over generated objects (0.2–3 s on one core for the shared hands) and kept until the hand is replaced. Only for hands with kinematics (imported or registered from MJCF or URDF).",
     params(("name" = String, Path, description = "The hand's name")),
     responses(
         (status = 200, description = "The posture space", body = HandSynergiesJson),
