@@ -12,6 +12,7 @@ mod debug;
 pub mod gravity;
 pub mod grip_reflex;
 pub mod hand;
+pub mod in_hand;
 pub mod labels;
 pub mod object;
 pub mod record;

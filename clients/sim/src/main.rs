@@ -212,6 +212,25 @@ enum Command {
         #[arg(long, default_value = "sim-results/grasp-labels")]
         out: PathBuf,
     },
+    /// The in-hand rotation task of dissertation §7.5 served to a trainer over stdin/stdout
+    /// (models/in_hand; protocol in src/in_hand/env_server.rs): the hand's posture synergies
+    /// come from graspd (GetHandSynergies) for r_hand (Eq 7.5).
+    InHandEnv {
+        /// The hand (built-in name, hand TOML or MJCF model); the task is laid out for the
+        /// Shadow hand palm up.
+        #[arg(long, default_value = "shadow")]
+        hand: String,
+        #[arg(long, value_enum, default_value = "block")]
+        object: graspd_sim::in_hand::env::InHandObject,
+        #[arg(long, value_enum, default_value = "z")]
+        rotation: graspd_sim::in_hand::env::TargetRotation,
+        /// Environments stepped together.
+        #[arg(long, default_value_t = 8)]
+        envs: usize,
+        /// Seed of the first environment (environment k draws from seed + k).
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
     /// How well graspd's completion of a single view guesses the unseen side, against the
     /// object seen from all around the table (markdown, per object). Needs no graspd.
     Completion {
@@ -374,6 +393,33 @@ fn real_main() -> Result<(), SimError> {
             )?;
             let rec = run_trial(&scene, &hand, &object, &service, seed, &opts);
             println!("{}", serde_json::to_string_pretty(&rec).unwrap_or_default());
+        }
+        Command::InHandEnv {
+            hand,
+            object,
+            rotation,
+            envs,
+            seed,
+        } => {
+            use graspd_sim::in_hand::env::{InHandScene, InHandTask};
+            if !(1..=256).contains(&envs) {
+                return Err(SimError::Input(format!("--envs: 1 to 256, got {envs}")));
+            }
+            let hand = SimHand::load(&hand, &hands_dir)?;
+            service.ensure_hand(&hand)?;
+            let scene = InHandScene::build(&hand, InHandTask { object, rotation })?;
+            let reward = graspd_sim::in_hand::hand_reward::HandReward::new(
+                service.hand_synergies(&hand.graspd_hand)?,
+                &scene,
+            )?;
+            graspd_sim::in_hand::env_server::serve(
+                &scene,
+                &reward,
+                envs,
+                seed,
+                std::io::stdin().lock(),
+                std::io::BufWriter::new(std::io::stdout().lock()),
+            )?;
         }
         Command::Stabilize {
             hand,

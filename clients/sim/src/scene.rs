@@ -164,7 +164,7 @@ pub fn scene_xml(
     Ok(x)
 }
 
-fn xml_escape(s: &str) -> String {
+pub(crate) fn xml_escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('"', "&quot;")
         .replace('<', "&lt;")
@@ -278,7 +278,7 @@ pub fn on_table(x: f64, y: f64, yaw: f64) -> Isometry3<f64> {
 
 /// Multiplies the position gain of every hand actuator and its stiffness bias by `scale`
 /// ([`SimHand::servo_gain_scale`]): force = s·kp·(ctrl − length), the same equilibrium.
-fn scale_servo_gains(model: &mut MjModel, scale: f64) {
+pub(crate) fn scale_servo_gains(model: &mut MjModel, scale: f64) {
     if scale == 1.0 {
         return;
     }

@@ -94,6 +94,22 @@ impl Service {
         Ok(true)
     }
 
+    /// The hand's posture synergies (GetHandSynergies, dissertation §7.3), checked and
+    /// converted.
+    pub fn hand_synergies(
+        &self,
+        name: &str,
+    ) -> Result<graspd_core::hand::PostureSynergies, SimError> {
+        let mut c = self.client.clone();
+        let answer = self
+            .rt
+            .block_on(c.get_hand_synergies(pb::GetHandSynergiesRequest { name: name.into() }))
+            .map_err(|s| SimError::Service(format!("GetHandSynergies {name}: {s}")))?;
+        graspd_api::convert::synergies_from_proto(answer.into_inner(), "synergies")
+            .map(|h| h.synergies)
+            .map_err(|e| SimError::Service(format!("GetHandSynergies {name}: {e}")))
+    }
+
     /// PlanGrasp on a rendered frame (or the object's cloud when `cloud` is given), with further
     /// views of the scene fused (`extra_views`, RGB-D input only).
     pub fn plan(
