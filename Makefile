@@ -3,7 +3,7 @@ CARGO ?= cargo
 # Extra flags for `make run`, e.g. make run ARGS="--rest-addr 127.0.0.1:8081 --log-format json"
 ARGS ?=
 
-.PHONY: build run test fmt lint fuzz models models-grasp-type models-tactile models-recogniser models-grasp-quality sim-bench sim-stabilize sim-clutter
+.PHONY: build run test fmt lint fuzz models models-grasp-type models-tactile models-recogniser models-grasp-quality models-in-hand sim-bench sim-stabilize sim-clutter
 
 # The ONNX Runtime library that ort loads at run time (grasp-type model, docs/model-contract.md);
 # `run` and `test` fetch it first with scripts/fetch-onnxruntime.sh.
@@ -70,6 +70,12 @@ models-recogniser:
 # Labels sampled 2F-85 grasps in MuJoCo (about 27 min on 2 cores), then trains (about 8 min).
 models-grasp-quality:
 	models/grasp_quality/train.sh
+
+# The in-hand rotation policies of dissertation ch. 7 (docs/in-hand.md): five algorithms × block
+# and egg in MuJoCo, IN_HAND_STEPS environment steps each (default 200,000: about 2 h on two
+# cores), curves into docs/in-hand/. Not part of `make models`: it ships no model yet.
+models-in-hand:
+	models/in_hand/train.sh
 
 # The grasp benchmark in MuJoCo (clients/sim/README.md, docs/sim-benchmark.md): starts a release
 # graspd on loopback and runs graspd-sim bench with the Robotiq 2F-85, Barrett, Shadow and Allegro
