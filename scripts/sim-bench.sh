@@ -11,20 +11,12 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 hands="$root/../shared/testdata/hands"
-log="$(mktemp)"
-"$root/target/release/graspd" --grpc-addr 127.0.0.1:0 --rest-addr 127.0.0.1:0 \
+. "$root/scripts/graspd-loopback.sh"
+start_graspd \
     --import-hand robotiq_2f85="$hands/robotiq_2f85/2f85.xml" \
     --import-hand barrett_mjcf="$hands/barrett/wam_barrett_gripper.xml" \
     --import-hand shadow_mjcf="$hands/shadow_hand/right_hand.xml" \
-    --import-hand allegro="$hands/wonik_allegro/right_hand.xml" >"$log" 2>&1 &
-pid=$!
-trap 'kill $pid 2>/dev/null; rm -f "$log"' EXIT
-for _ in $(seq 100); do
-    grep -q "graspd listening" "$log" && break
-    sleep 0.2
-done
-addr="$(sed -n 's/^graspd listening grpc=\([^ ]*\).*/\1/p' "$log")"
-[ -n "$addr" ] || { cat "$log"; exit 1; }
+    --import-hand allegro="$hands/wonik_allegro/right_hand.xml"
 sim() {
     "$root/target/release/graspd-sim" --graspd "http://$addr" \
         --testdata "$root/../shared/testdata" "$@"

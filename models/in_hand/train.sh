@@ -17,16 +17,8 @@ export MUJOCO_DYNAMIC_LINK_DIR="${MUJOCO_DYNAMIC_LINK_DIR:-$("$root/scripts/fetc
 export LD_LIBRARY_PATH="$MUJOCO_DYNAMIC_LINK_DIR:${LD_LIBRARY_PATH:-}"
 (cd "$here" && "$py" -m pytest -q -p no:cacheprovider test_marl_ppo.py)
 (cd "$root" && cargo build --release --bin graspd --bin graspd-sim)
-log="$(mktemp)"
-"$root/target/release/graspd" --grpc-addr 127.0.0.1:0 --rest-addr 127.0.0.1:0 >"$log" 2>&1 &
-pid=$!
-trap 'kill $pid 2>/dev/null; rm -f "$log"' EXIT
-for _ in $(seq 100); do
-	grep -q "graspd listening" "$log" && break
-	sleep 0.2
-done
-addr="$(sed -n 's/^graspd listening grpc=\([^ ]*\).*/\1/p' "$log")"
-[ -n "$addr" ] || { cat "$log"; exit 1; }
+. "$root/scripts/graspd-loopback.sh"
+start_graspd
 out="${IN_HAND_OUT:-$root/target/in_hand}"
 for task in ${IN_HAND_TASKS:-block egg}; do
 	for algo in ${IN_HAND_ALGOS:-ppo ppo_hand ppo_unc composite marl}; do
