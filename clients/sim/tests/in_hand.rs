@@ -1,6 +1,7 @@
 //! The in-hand rotation task (dissertation §7.5, issue 19) in MuJoCo: the block rests on the
 //! still hand for a whole episode, a drop is latched and paid at Eq 7.12's −10, r_hand follows
-//! Eq 7.5 on the hand's joints, and the trainer's pipe answers with the documented layout.
+//! Eq 7.5 on the hand's joints (with hand-made synergies, and with the ones a real graspd serves
+//! on loopback), and the trainer's pipe answers with the documented layout.
 
 use graspd_core::GraspType;
 use graspd_core::hand::PostureSynergies;
@@ -11,6 +12,7 @@ use graspd_sim::in_hand::env::{
 };
 use graspd_sim::in_hand::env_server::{STEP_EXTRAS, serve};
 use graspd_sim::in_hand::hand_reward::HandReward;
+use graspd_sim::service::Service;
 
 fn shadow_scene(object: InHandObject) -> Option<InHandScene> {
     let d = graspd_testkit::testdata_dir();
@@ -217,4 +219,43 @@ fn the_trainers_pipe_answers_with_the_documented_layout() {
         .unwrap()
         .to_string();
     assert!(e.contains("unknown command"), "{e}");
+}
+
+/// The synergies graspd fits to its own Shadow plans, fetched as graspd-sim in-hand-env fetches
+/// them (the hand registered by the client, then GetHandSynergies): every joint maps onto the
+/// scene, and the open hand the episodes start from lies far from the precision centre.
+#[test]
+fn r_hand_from_the_synergies_a_running_graspd_serves() {
+    let Some(scene) = shadow_scene(InHandObject::Block) else {
+        return;
+    };
+    let server = graspd_e2e::Server::start();
+    let rt = tokio::runtime::Runtime::new().unwrap();
+    let service =
+        Service::connect(&format!("http://{}", server.grpc_addr), rt.handle().clone()).unwrap();
+    let hand = SimHand::load("shadow", &graspd_testkit::testdata_dir().join("hands")).unwrap();
+    service.ensure_hand(&hand).unwrap();
+    let synergies = service.hand_synergies(&hand.graspd_hand).unwrap();
+    assert_eq!(synergies.joints.len(), 24);
+    let precision = synergies
+        .centres
+        .iter()
+        .find(|c| c.grasp_type == GraspType::Precision)
+        .expect("the Shadow's plans include precision grasps")
+        .amplitudes[..2]
+        .to_vec();
+    let reward = HandReward::new(synergies.clone(), &scene).unwrap();
+    let mut env = InHandEnv::new(&scene, 1);
+    env.reset();
+    let open = env.joint_angles();
+    assert!(reward.distance(&open) > 1.4, "{}", reward.distance(&open));
+    assert_eq!(reward.reward(&open), -10.0);
+    // The precision centre's posture (Eq 7.3), in the scene's joint order, earns 1.5.
+    let centre = synergies.posture(&precision);
+    let mut q = vec![0.0; scene.hand_joints.len()];
+    for (name, v) in synergies.joints.iter().zip(&centre) {
+        q[index(&scene, name)] = *v;
+    }
+    assert!(reward.distance(&q) < 1e-9);
+    assert_eq!(reward.reward(&q), 1.5);
 }
