@@ -68,12 +68,11 @@ def evaluate(args, policy, norm, episodes):
                        envs, args.workers, 1_000_000 + args.seed * 1000)
     s = env.reset()
     ended, successes, drops, angles = 0, 0, 0, []
-    started = np.ones(envs, dtype=bool)
     while ended < episodes:
         with torch.no_grad():
             a = policy.mean(torch.tensor(norm(s), dtype=torch.float32)).clamp(-1, 1).numpy()
         _, s, _, _, angle, done, success, dropped = env.step(a)
-        for k in np.flatnonzero(done & started):
+        for k in np.flatnonzero(done):
             if ended < episodes:
                 ended += 1
                 successes += int(success[k])

@@ -4,7 +4,7 @@
 # (MuJoCo: scripts/fetch-mujoco.sh), starts graspd on a free loopback port (the Shadow's posture
 # synergies for r_hand come from it), then trains the five algorithms of §7.5.2 (ppo, ppo_hand,
 # ppo_unc, composite, marl) on the block and the egg for $IN_HAND_STEPS environment steps each
-# (default 200,000: about 11 min a run, 2 h in all on two cores) into $IN_HAND_OUT (default
+# (default 200,000: about 12 min a run, 2 h in all on two cores) into $IN_HAND_OUT (default
 # target/in_hand; a run with a metrics.json is kept), and draws the learning curves into
 # docs/in-hand/. IN_HAND_TASKS and IN_HAND_ALGOS (space-separated) narrow the set; extra
 # arguments go to train.py.
