@@ -342,13 +342,15 @@ async fn request_ids_come_back_on_both_transports_and_name_the_log_lines() {
             v["fields"]["message"] == "planned" && v["span"]["request_id"] == id
         })
     };
+    // The log line of the last plan may follow its answer: wait for every one of them.
+    let ids = ["robot-7/plan:42", "rest-id-1", &replaced_rest];
     for _ in 0..100 {
-        if planned_with("robot-7/plan:42") && planned_with("rest-id-1") {
+        if ids.iter().all(|id| planned_with(id)) {
             break;
         }
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
-    for id in ["robot-7/plan:42", "rest-id-1", &replaced_rest] {
+    for id in ids {
         assert!(
             planned_with(id),
             "no 'planned' line with request_id {id}:\n{:#?}",
