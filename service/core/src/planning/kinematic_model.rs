@@ -6,7 +6,9 @@
 
 use crate::error::FieldError;
 use crate::hand::HandDescription;
-use crate::hand::kinematics::{HandCollision, HandSynergy, KinematicHand, PreShape};
+use crate::hand::kinematics::{
+    HandCollision, HandSynergy, KinematicHand, PreShape, ProjectionMemo,
+};
 
 /// A hand's kinematics prepared for planning.
 #[derive(Debug, Clone)]
@@ -17,6 +19,8 @@ pub struct KinematicModel {
     pub synergy: HandSynergy,
     /// The pre-shape of each way the hand realises a grasp type (kinematic finger indices).
     pub pre_shapes: Vec<PreShapeEntry>,
+    /// The linkage projections its plans' closing sweeps solved (kept for the plans after).
+    pub projections: ProjectionMemo,
 }
 
 /// The pre-shapes of one grasp realisation: fingers h1 (empty: the palm) against h2, the best
@@ -56,6 +60,7 @@ impl KinematicModel {
             collision,
             synergy,
             pre_shapes,
+            projections: ProjectionMemo::default(),
         })
     }
 

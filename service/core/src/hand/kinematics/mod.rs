@@ -23,6 +23,7 @@ pub mod inverse_kinematics;
 pub mod kinematic_tree;
 pub mod mesh;
 pub mod mjcf;
+pub mod projection_memo;
 pub mod urdf;
 mod xml;
 
@@ -34,3 +35,4 @@ pub use inverse_kinematics::{ContactTarget, FingerIk, HandIk, IkOptions, PalmFre
 pub use kinematic_tree::{
     Body, Geom, GeomShape, Joint, JointCoupling, JointKind, KinematicTree, LoopClosure, Site,
 };
+pub use projection_memo::ProjectionMemo;

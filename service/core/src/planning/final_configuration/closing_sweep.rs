@@ -15,7 +15,7 @@ use super::ObjectView;
 use super::object_view::NearPoints;
 use crate::error::FieldError;
 use crate::hand::kinematics::{
-    ForwardKinematics, HandCollision, HandSynergy, KinematicHand, PosedCollision,
+    ForwardKinematics, HandCollision, HandSynergy, KinematicHand, PosedCollision, ProjectionMemo,
 };
 use nalgebra::{Isometry3, Point3, Vector3};
 
@@ -88,6 +88,8 @@ pub struct SweepHand<'a> {
     pub hand: &'a KinematicHand,
     pub synergy: &'a HandSynergy,
     pub collision: &'a HandCollision,
+    /// Where the linkage projections of the hand's sweeps are kept.
+    pub projections: &'a ProjectionMemo,
     /// The model's root in the world (fixed while the fingers close).
     pub root_in_world: Isometry3<f64>,
 }
@@ -138,8 +140,8 @@ impl SweepHand<'_> {
                     *x = warm[j];
                 }
             }
-            let (_, fk) = tree.project_constraints_fk(&mut q, &held)?;
-            let posed = self.collision.posed_fk(&fk, &self.root_in_world);
+            let projected = self.projections.project(tree, &mut q, &held)?;
+            let posed = self.collision.posed_fk(&projected.1, &self.root_in_world);
             return Ok((q, posed));
         }
         let posed = self.posed(&q, base, at_base)?;

@@ -28,6 +28,7 @@ impl FinalConfiguration {
             hand: &model.hand,
             synergy: &model.synergy,
             collision: &model.collision,
+            projections: &model.projections,
             root_in_world: self.root_pose,
         };
         let pre = std::mem::take(&mut self.pregrasp);

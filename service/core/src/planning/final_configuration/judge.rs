@@ -215,6 +215,7 @@ fn judge_with(
             hand,
             synergy: syn,
             collision: &model.collision,
+            projections: &model.projections,
             root_in_world: root,
         };
         let closed = close_fingers(&sweep, &q_pre, &grasp.taking_part, s0, object)?;
