@@ -275,8 +275,9 @@ impl<'a> InHandEnv<'a> {
         self.state()
     }
 
-    /// One control step: each actuator's command moved by `action` (each in [−1, 1], clamped)
-    /// times [`ACTION_STEP`] of its command range, kept in the range, then [`SUBSTEPS`]
+    /// One control step: each actuator's command moved by `action` (each in [−1, 1], clamped;
+    /// a non-finite one holds its actuator, as 0 does, so that a diverged policy cannot put NaN
+    /// into the simulation) times [`ACTION_STEP`] of its command range, kept in the range, then [`SUBSTEPS`]
     /// simulation steps. Relative to the commanded angle, not the measured one: an action of 0
     /// holds the posture (relative to the measured angle, the servos would push nothing back
     /// against gravity and the hand would sag).
