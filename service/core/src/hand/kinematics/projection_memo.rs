@@ -27,9 +27,19 @@ type Key = Vec<u64>;
 type Projected = Arc<(Vec<f64>, ForwardKinematics)>;
 
 /// Projections of one hand's tree, shared by the plans (and the threads) that use the hand.
-#[derive(Debug, Default)]
+#[derive(Default)]
 pub struct ProjectionMemo {
     entries: Mutex<HashMap<Key, Projected>>,
+}
+
+impl std::fmt::Debug for ProjectionMemo {
+    /// How many projections are kept, not the poses themselves (a model's debug print would
+    /// otherwise run to megabytes).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ProjectionMemo")
+            .field("kept", &self.len())
+            .finish()
+    }
 }
 
 impl Clone for ProjectionMemo {
