@@ -10,7 +10,8 @@
 //! and those it holds), so a kept answer is the one it would compute again, bit for bit: plans
 //! do not depend on what the memo holds.
 
-use super::{ForwardKinematics, KinematicTree};
+use super::forward_kinematics::ForwardKinematics;
+use super::kinematic_tree::KinematicTree;
 use crate::error::FieldError;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
